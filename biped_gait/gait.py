@@ -1,0 +1,157 @@
+"""One verified periodic gait: request checks, BVP with closure, optimal impulses, reports.
+
+``GaitPlanner.plan`` is the core entry point used by the CLI and, later, by the ROS nodes.
+Inputs and outputs are SI with angles in radians; the request's checks raise ``ValueError``
+with a one-line message (angles quoted in degrees, as users give them).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .boundary import GaitMode
+from .bvp import CLOSURES, BvpSolution, locked_rotation, next_step_velocity, solve_bvp
+from .flow import BallisticFlow, hermite_samples
+from .impulses import EFFORTS, ImpactProblem, solve_impulses
+from .model import BipedModel
+from .params import BipedParams, load_params
+from .reports import StepTrajectory, step_figures
+from .result import GaitResult
+
+DEFAULT_STEPS = 32
+DEFAULT_SAMPLES = 91
+
+
+@dataclass(frozen=True)
+class GaitRequest:
+    """What to plan: step length L (m), period T (s), arm amplitude alpha (rad), gait mode,
+    parameter set (name or file; empty: default), closure (``theta``/``slack``), effort
+    (``l1``/``l2``)."""
+
+    step_length: float
+    period: float
+    arm_amplitude: float
+    mode: GaitMode | str = GaitMode.NORMAL
+    params: str = ""
+    closure: str = "theta"
+    effort: str = "l1"
+
+
+def _finite(name: str, value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ValueError(f"{name} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value}")
+    return float(value)
+
+
+def validate_request(request: GaitRequest, params: BipedParams) -> tuple[float, float, float, GaitMode]:
+    """Check a request against the biped; return (L, T, alpha, mode) or raise ``ValueError``."""
+    step_length = _finite("step length", request.step_length)
+    period = _finite("period", request.period)
+    alpha = _finite("arm amplitude", request.arm_amplitude)
+    two_l = 2 * params.leg_length
+    if not 0 < step_length < two_l:
+        raise ValueError(f"step length must be in (0, {two_l:.3f}) m (twice the leg length), got {step_length:g} m")
+    if period <= 0:
+        raise ValueError(f"period must be positive, got {period:g} s")
+    if not 0 <= alpha < math.pi / 2:
+        raise ValueError(f"arm amplitude must be in [0, 90) deg, got {math.degrees(alpha):g} deg")
+    mode = GaitMode.parse(request.mode)
+    if request.closure not in CLOSURES:
+        raise ValueError(f"unknown closure {request.closure!r}: use 'theta' or 'slack'")
+    if request.effort not in EFFORTS:
+        raise ValueError(f"unknown effort {request.effort!r}: use 'l1' or 'l2'")
+    return step_length, period, alpha, mode
+
+
+class GaitPlanner:
+    """Plans gaits for one parameter set; keeps its Pinocchio models and integrator.
+
+    Not thread-safe (Pinocchio data are reused): give each thread or process its own planner.
+    """
+
+    def __init__(self, params: BipedParams | str | None = None, steps: int = DEFAULT_STEPS, samples: int = DEFAULT_SAMPLES):
+        self.params = params if isinstance(params, BipedParams) else load_params(params)
+        self.model = BipedModel.from_params(self.params)
+        self.flow = BallisticFlow(self.model.single, steps)
+        self.samples = samples
+
+    def plan(self, request: GaitRequest, guess: tuple[np.ndarray, float] | None = None) -> GaitResult:
+        """Solve one gait. ``guess`` = (qd(0), theta) of a nearby gait warm-starts the BVP.
+
+        Raises ``ValueError`` for an invalid request; a solve that fails is returned with
+        ``converged`` or ``admissible`` False and the reason in ``message``/``reasons``.
+        """
+        if request.params and request.params != self.params.name:
+            raise ValueError(f"this planner holds parameter set {self.params.name!r}, not {request.params!r}")
+        step_length, period, alpha, mode = validate_request(request, self.params)
+        start = time.perf_counter()
+        bm = self.model
+        args = (bm, self.flow, step_length, period, alpha, mode)
+        if guess is None and request.closure == "theta":
+            # theta = 0 first: from the straight-line guess this lands on the human-like branch,
+            # which the full system then refines (cold, the full system may reach the twin).
+            first = solve_bvp(*args, closure="slack")
+            bvp = solve_bvp(*args, closure="theta", guess=(first.qd_a, 0.0)) if first.converged else first
+            bvp.evaluations += first.evaluations if bvp is not first else 0
+        else:
+            bvp = solve_bvp(*args, closure=request.closure, guess=guess)
+        result = GaitResult.empty(request, step_length, period, alpha, mode, self.params.name)
+        result.fill_bvp(bvp)
+        if bvp.converged:
+            self._double_support(result, bvp, request)
+            self._single_support(result, bvp, period)
+        result.judge()
+        result.solve_time_s = time.perf_counter() - start
+        return result
+
+    def _double_support(self, result: GaitResult, bvp: BvpSolution, request: GaitRequest) -> None:
+        bm = self.model
+        q_t = bvp.q_target
+        j1, j2 = bm.tip_jacobians(q_t)
+        d_e = bm.mass_matrix(q_t)
+        z = locked_rotation(bm, q_t)
+        xd_b = np.concatenate([np.zeros(3), bvp.qd_b])
+        xd_a = next_step_velocity(bm, q_t, bvp.qd_a)
+        slack = 0.0
+        if request.closure == "slack":
+            # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
+            # eqs. (6)-(10) consistent (z_d^T D_e (Xd^a + s z_d - Xd^b) = 0).
+            slack = -float(z @ d_e @ (xd_a - xd_b)) / float(z @ d_e @ z)
+            xd_a = xd_a + slack * z
+        problem = ImpactProblem(d_e, j1, j2, xd_b, xd_a, z)
+        sol = solve_impulses(problem, request.effort)
+        new_foot = bm.swing_tip(q_t)
+        result.fill_impulses(sol, xd_b, xd_a, slack)
+        result.H_Tminus = [bm.vertical_momentum_about(q_t, xd_b, np.zeros(3)), bm.vertical_momentum_about(q_t, xd_b, new_foot)]
+        result.H_Tplus = [bm.vertical_momentum_about(q_t, xd_a, np.zeros(3)), bm.vertical_momentum_about(q_t, xd_a, new_foot)]
+        result.new_stance_foot = new_foot.tolist()
+        if sol.success:
+            result.swing_tip_vz_before_impact = float(j2[2] @ sol.xd_minus)
+            result.old_stance_tip_vz_after_impact = float(j1[2] @ sol.xd_plus)
+            result.new_stance_tip_speed_after = float(np.linalg.norm(j2 @ xd_a))
+
+    def _single_support(self, result: GaitResult, bvp: BvpSolution, period: float) -> None:
+        flow = self.flow
+        run = flow.propagate(bvp.q0, bvp.qd_a, period, keep_nodes=True)
+        result.dynamics_evaluations += run.evaluations
+        times = np.linspace(0.0, period, self.samples)
+        q, qd = hermite_samples(run.nodes, times)
+        qdd = np.array([flow.acceleration(a, b) for a, b in zip(q, qd)])
+        traj = StepTrajectory(times, q, qd, qdd)
+        energy = self.energy(run.nodes[1], run.nodes[2])
+        result.fill_step(traj, step_figures(self.model, traj, period), float(np.max(np.abs(energy / energy[0] - 1))))
+
+    def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """Total mechanical energy (J) at each row of (q, qd): kinetic plus gravitational
+        potential, zero height at the stance tip."""
+        model, data = self.model.single, self.model.single_data
+        return np.array(
+            [pin.computeKineticEnergy(model, data, a, b) + pin.computePotentialEnergy(model, data, a) for a, b in zip(q, qd)]
+        )

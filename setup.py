@@ -1,0 +1,25 @@
+"""biped_gait: an ament_python package, installable with pip (entry points below)."""
+
+from setuptools import find_packages, setup
+
+PACKAGE = "biped_gait"
+
+setup(
+    name=PACKAGE,
+    version="0.1.0",
+    description="Ballistic walking gaits of a 3D seven-link biped with swinging arms",
+    license="Apache-2.0",
+    python_requires=">=3.11",
+    packages=find_packages(include=[PACKAGE, f"{PACKAGE}.*"]),
+    package_data={f"{PACKAGE}.data": ["*.yaml"]},
+    data_files=[
+        ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
+        (f"share/{PACKAGE}", ["package.xml"]),
+    ],
+    install_requires=["numpy", "scipy", "pin", "osqp", "PyYAML"],
+    entry_points={
+        "console_scripts": [
+            "biped-gait = biped_gait.cli:main",
+        ],
+    },
+)
