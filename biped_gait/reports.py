@@ -46,6 +46,7 @@ def ground_reaction_momentum(bm: BipedModel, q: np.ndarray, qd: np.ndarray, qdd:
     through the tip (gravity has no vertical moment, the ground force none about the tip).
     """
     model, data = bm.single, bm.single_data
+    pin.centerOfMass(model, data, q, qd, qdd)  # com, vcom, acom
     pin.computeCentroidalMomentumTimeVariation(model, data, q, qd, qdd)
     mass = data.mass[0]
     com, acom = data.com[0], data.acom[0]

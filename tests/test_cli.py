@@ -1,0 +1,72 @@
+"""The ``biped-gait`` command as a user runs it: a real subprocess of the installed entry point."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ENTRY = shutil.which("biped-gait", path=str(Path(sys.executable).parent))
+
+
+def run(*args: str) -> subprocess.CompletedProcess:
+    assert ENTRY, "the biped-gait entry point is not installed in this environment"
+    return subprocess.run([ENTRY, *args], capture_output=True, text=True, timeout=120)
+
+
+def test_plan_defaults_prints_a_converged_admissible_gait(tmp_path):
+    out = tmp_path / "gait.json"
+    proc = run("plan", "--json", str(out))
+    assert proc.returncode == 0, proc.stderr
+    assert "converged True" in proc.stdout and "admissible True" in proc.stdout
+    assert "W = " in proc.stdout and "theta = " in proc.stdout
+    data = json.loads(out.read_text())
+    assert data["converged"] and data["admissible"] and data["W"] > 0
+
+
+def test_plan_options_reach_the_core():
+    proc = run("plan", "--step-length", "0.40", "--arm-amplitude", "20", "--mode", "anti-normal",
+               "--params", "aoustin2013-table", "--closure", "slack", "--effort", "l2")
+    assert proc.returncode == 0, proc.stderr
+    assert "anti-normal, params aoustin2013-table, closure slack, effort l2" in proc.stdout
+    assert "s = " in proc.stdout
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--step-length", "2.0"], "step length must be in (0, 1.814) m"),
+        (["--step-length", "nan"], "step length must be a finite number"),
+        (["--period", "-0.4"], "period must be positive"),
+        (["--arm-amplitude", "90"], "arm amplitude must be in [0, 90) deg, got 90 deg"),
+        (["--arm-amplitude", "inf"], "arm amplitude must be a finite number"),
+        (["--mode", "hop"], "unknown gait mode 'hop'"),
+        (["--params", "no-such-set"], "unknown parameter set 'no-such-set'"),
+    ],
+)
+def test_bad_input_is_one_line_and_a_nonzero_exit(args, message):
+    proc = run("plan", *args)
+    assert proc.returncode == 2
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0]
+    assert proc.stdout == ""
+
+
+def test_bad_parameter_file(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: bad\nlinks: {}\ngeometry: {}\n")
+    proc = run("plan", "--params", str(bad))
+    assert proc.returncode == 2 and "missing value links.shin" in proc.stderr
+
+
+def test_urdf_command_writes_a_robot(tmp_path):
+    out = tmp_path / "biped.urdf"
+    proc = run("urdf", "--output", str(out))
+    assert proc.returncode == 0
+    text = out.read_text()
+    for joint in ("right_hip", "left_knee", "torso_yaw", "left_shoulder"):
+        assert f'<joint name="{joint}" type="revolute">' in text

@@ -1,0 +1,226 @@
+"""One periodic gait end to end: BVP, closure, impact equations, LP certificate, the ground
+reaction two ways, periodicity through the leg exchange, warm starts, options."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+from biped_gait.boundary import P_INVERSE, P_MATRIX, GaitMode
+from biped_gait.bvp import solve_bvp
+from biped_gait.gait import GaitPlanner, GaitRequest
+from biped_gait.impulses import I_MINUS, I_PLUS, solve_impulses
+from biped_gait.reports import ground_reaction_inverse_dynamics, ground_reaction_momentum
+
+from .conftest import DEFAULT_REQUEST, impact_problem
+
+
+def test_default_gait_is_converged_admissible_and_human_like(default_gait):
+    g = default_gait
+    assert g.converged and g.admissible, g.reasons
+    assert g.min_grf_z > 0 and g.min_swing_height > 0
+    assert g.q9_min >= -1e-9  # swing knee flexes forward: the human-like branch
+    assert abs(math.degrees(g.theta)) < 1.0  # "a fraction of a degree"
+    assert max(abs(v) for v in g.q3_range) < math.radians(1.0)  # stance leg nearly straight
+
+
+def test_bvp_and_closure_residuals(default_gait):
+    assert default_gait.end_point_residual < 1e-10
+    assert abs(default_gait.closure_residual) < 1e-9
+
+
+def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
+    problem = impact_problem(planner, default_gait)
+    a, b = problem.equations()
+    sol = solve_impulses(problem, "l1")
+    assert np.max(np.abs(a @ sol.x - b)) < 1e-9
+    assert np.linalg.matrix_rank(a, tol=1e-8) == 41  # the rank deficiency of spec section 4
+    assert abs(problem.left_null_vector() @ b) < 1e-9
+    j1, j2 = problem.j1, problem.j2
+    assert np.abs(j1 @ sol.xd_minus).max() < 1e-9  # old stance tip still at rest before the impact
+    assert np.abs(j2 @ sol.xd_plus).max() < 1e-9  # new stance tip at rest after the passive impact
+    assert np.abs(j2 @ np.array(default_gait.Xd_a)).max() < 1e-12  # and at the start of the next step
+    assert j2[2] @ sol.xd_minus <= 1e-12 and j1[2] @ sol.xd_plus >= -1e-12  # sign constraints
+    for reaction in (sol.ir1_minus, sol.ir2, sol.ir2_plus):
+        assert reaction[2] >= -1e-12
+    assert sol.W == pytest.approx(default_gait.W, rel=1e-12)
+
+
+def test_lp_optimum_is_certified_two_ways(planner, default_gait):
+    """The dual certificate from HiGHS, and the same LP solved by HiGHS's interior point."""
+    assert default_gait.lp_duality_gap < 1e-9
+    problem = impact_problem(planner, default_gait)
+    a, b = problem.equations()
+    keep = np.arange(42) != int(np.argmax(np.abs(problem.left_null_vector())))
+    # The LP in the form W = sum(p + m), I = p - m, p, m >= 0: another formulation, another algorithm.
+    n = 47
+    idx = np.r_[np.arange(I_MINUS.start, I_MINUS.stop), np.arange(I_PLUS.start, I_PLUS.stop)]
+    k = idx.size
+    a_eq = np.hstack([a[keep], np.zeros((41, 2 * k))])
+    a_eq[:, idx] = 0.0
+    a_eq[:, n : n + k] = a[keep][:, idx]
+    a_eq[:, n + k :] = -a[keep][:, idx]
+    c = np.concatenate([np.zeros(n), np.ones(2 * k)])
+    bounds = [(None, None)] * n + [(0, None)] * (2 * k)
+    for i in idx:
+        bounds[i] = (0, 0)
+    for sl_end in (22, 37, 47):
+        bounds[sl_end - 1] = (0, None)
+    a_ub = np.zeros((2, n + 2 * k))
+    a_ub[0, 0:12] = problem.j2[2]
+    a_ub[1, 22:34] = -problem.j1[2]
+    res = linprog(c, A_ub=a_ub, b_ub=np.zeros(2), A_eq=a_eq, b_eq=b[keep], bounds=bounds, method="highs-ipm")
+    assert res.status == 0
+    assert res.fun == pytest.approx(default_gait.W, rel=1e-7)
+
+
+def test_ground_reaction_two_ways(planner, default_gait):
+    traj = default_gait.trajectory
+    flow = planner.flow
+    for i in range(0, len(traj["t"]), 9):
+        q, qd = np.array(traj["q"][i]), np.array(traj["qd"][i])
+        qdd = flow.acceleration(q, qd)
+        by_rnea = ground_reaction_inverse_dynamics(planner.model, q, qd, qdd)
+        by_momentum = ground_reaction_momentum(planner.model, q, qd, qdd)
+        assert np.allclose(by_rnea, by_momentum, rtol=1e-9, atol=1e-8)
+        assert by_rnea[2] > 0
+
+
+def _apply_impulses(problem, sol):
+    """Forward path: apply I^-, the passive impact, I^+ as impacts and return Xd^a.
+
+    Each sub-phase solves D_e dXd = B_e I + J^T I_R with the contact J Xd = 0 (or J dXd = 0):
+    an independent computation of what the LP's equations claim.
+    """
+    d, j1, j2 = problem.mass_matrix, problem.j1, problem.j2
+    b_e = np.vstack([np.zeros((5, 7)), np.eye(7)])
+
+    def impact(xd, impulse, jac, target_rest):
+        kkt = np.block([[d, -jac.T], [jac, np.zeros((3, 3))]])
+        rhs = np.concatenate([d @ xd + b_e @ impulse, np.zeros(3) if target_rest else jac @ xd])
+        return np.linalg.solve(kkt, rhs)[:12]
+
+    xd_minus = impact(problem.xd_b, sol.i_minus, j1, target_rest=False)
+    xd_plus = impact(xd_minus, np.zeros(7), j2, target_rest=True)
+    return xd_minus, xd_plus, impact(xd_plus, sol.i_plus, j2, target_rest=True)
+
+
+def test_gait_is_periodic_through_the_leg_exchange(planner, default_gait):
+    problem = impact_problem(planner, default_gait)
+    sol = solve_impulses(problem, "l1")
+    xd_minus, xd_plus, xd_a = _apply_impulses(problem, sol)
+    assert np.allclose(xd_minus, sol.xd_minus, atol=1e-9)
+    assert np.allclose(xd_plus, sol.xd_plus, atol=1e-9)
+    assert np.allclose(xd_a, default_gait.Xd_a, atol=1e-9)
+    # In the next step's coordinates the state is again (q(0), qd(0)): an exact periodic orbit.
+    assert np.allclose(P_MATRIX @ np.array(default_gait.qT), default_gait.q0, atol=1e-14)
+    assert np.allclose(P_MATRIX @ xd_a[3:], default_gait.qd_a, atol=1e-9)
+    # Two steps walked with the flow return to the same state (step 2 starts from the map).
+    run = planner.flow.propagate(P_MATRIX @ np.array(default_gait.qT), P_MATRIX @ xd_a[3:], default_gait.period)
+    assert np.allclose(run.q, default_gait.qT, atol=1e-9)
+    assert np.allclose(run.qd, default_gait.qd_b, atol=1e-8)
+
+
+def test_angular_momentum_is_conserved_about_the_feet_line(planner, default_gait):
+    bm = planner.model
+    q_t = np.array(default_gait.qT)
+    axis = np.array(default_gait.new_stance_foot) / np.linalg.norm(default_gait.new_stance_foot)
+    before = bm.momentum(q_t, np.array(default_gait.Xd_b))[1] @ axis
+    after = bm.momentum(q_t, np.array(default_gait.Xd_a))[1] @ axis
+    assert after == pytest.approx(before, abs=1e-9)
+    # The yaw momentum at T+ about the new foot is that about the old one shifted by r x p.
+    assert default_gait.H_Tplus[0] != pytest.approx(default_gait.H_Tplus[1], abs=1e-3)
+
+
+def test_warm_start_reproduces_the_cold_solution_faster(planner, default_gait):
+    warm = planner.plan(DEFAULT_REQUEST, guess=(np.array(default_gait.qd_a), default_gait.theta))
+    assert warm.bvp_iterations == 0
+    near = planner.plan(
+        dataclasses.replace(DEFAULT_REQUEST, arm_amplitude=DEFAULT_REQUEST.arm_amplitude + math.radians(1)),
+        guess=(np.array(default_gait.qd_a), default_gait.theta),
+    )
+    cold = planner.plan(dataclasses.replace(DEFAULT_REQUEST, arm_amplitude=DEFAULT_REQUEST.arm_amplitude + math.radians(1)))
+    assert near.converged and near.bvp_iterations <= 4
+    assert near.dynamics_evaluations < cold.dynamics_evaluations
+    assert near.theta == pytest.approx(cold.theta, abs=1e-10)
+    assert np.allclose(near.qd_a, cold.qd_a, atol=1e-9)
+    assert near.W == pytest.approx(cold.W, rel=1e-9)
+
+
+def test_slack_closure_keeps_theta_zero_and_reports_s(planner):
+    g = planner.plan(dataclasses.replace(DEFAULT_REQUEST, closure="slack"))
+    assert g.converged and g.admissible
+    assert g.theta == 0.0
+    assert 0 < abs(g.slack) < 0.01  # rad/s: a small correction along z_d
+    assert abs(g.closure_residual) < 1e-9
+    assert g.impact_equation_residual < 1e-9
+
+
+def test_quadratic_effort_by_osqp(planner, default_gait):
+    g = planner.plan(dataclasses.replace(DEFAULT_REQUEST, effort="l2"))
+    assert g.converged and g.admissible
+    assert g.impact_equation_residual < 1e-9
+    assert g.W >= default_gait.W - 1e-9  # the L1 optimum is the least W of all solutions
+    assert g.theta == pytest.approx(default_gait.theta, abs=1e-12)  # closure does not depend on effort
+
+
+def test_anti_normal_mode_and_table_parameters_also_solve(planner, default_gait):
+    anti = planner.plan(dataclasses.replace(DEFAULT_REQUEST, mode="anti-normal"))
+    assert anti.converged and anti.admissible
+    assert anti.q0[5] == pytest.approx(-DEFAULT_REQUEST.arm_amplitude)
+    table = GaitPlanner("aoustin2013-table").plan(dataclasses.replace(DEFAULT_REQUEST, params="aoustin2013-table"))
+    assert table.converged and table.params == "aoustin2013-table"
+    assert table.W != pytest.approx(default_gait.W, rel=1e-3)  # the arm inertia matters
+    with pytest.raises(ValueError, match="this planner holds parameter set"):
+        planner.plan(dataclasses.replace(DEFAULT_REQUEST, params="aoustin2013-table"))
+
+
+def test_a_solve_that_cannot_converge_says_so(planner):
+    bvp = solve_bvp(planner.model, planner.flow, 0.45, 0.45, 0.4, GaitMode.NORMAL, max_iter=1)
+    assert not bvp.converged and "no convergence in 1 Newton iterations" in bvp.message
+    extreme = planner.plan(GaitRequest(step_length=1.7, period=0.05, arm_amplitude=1.5, mode="normal"))
+    assert not extreme.admissible and extreme.reasons
+    json.loads(extreme.to_json())  # still serializable
+
+
+REQUIRED_KEYS = """step_length period arm_amplitude mode converged admissible theta W I_minus I_plus IR1_minus IR2
+IR2_plus Xd_minus Xd_plus Xd_a Xd_b qd_a qd_b q0 qT min_grf_z min_swing_height max_friction_ratio H_Tminus H_Tplus
+closure_residual solve_time_s""".split()
+
+
+def test_json_has_the_documented_keys(default_gait):
+    data = json.loads(default_gait.to_json())
+    missing = [k for k in REQUIRED_KEYS if k not in data]
+    assert not missing
+    assert len(data["I_minus"]) == 7 and len(data["Xd_a"]) == 12 and len(data["H_Tplus"]) == 2
+    assert data["mode"] == "normal" and data["arm_amplitude"] == pytest.approx(math.radians(23.5))
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(step_length=0.0), "step length must be in"),
+        (dict(step_length=1.9), "step length must be in"),
+        (dict(step_length=float("nan")), "step length must be a finite number"),
+        (dict(period=0.0), "period must be positive"),
+        (dict(period=float("inf")), "period must be a finite number"),
+        (dict(arm_amplitude=math.radians(90)), r"arm amplitude must be in \[0, 90\) deg, got 90 deg"),
+        (dict(arm_amplitude=-0.1), "arm amplitude must be in"),
+        (dict(arm_amplitude=float("nan")), "arm amplitude must be a finite number"),
+        (dict(mode="sideways"), "unknown gait mode 'sideways'"),
+        (dict(closure="none"), "unknown closure"),
+        (dict(effort="l3"), "unknown effort"),
+    ],
+)
+def test_bad_requests_are_refused(planner, change, message):
+    with pytest.raises(ValueError, match=message):
+        planner.plan(dataclasses.replace(DEFAULT_REQUEST, **change))
+
+
+def test_p_inverse_is_the_inverse():
+    assert np.allclose(P_MATRIX @ P_INVERSE, np.eye(9), atol=1e-15)

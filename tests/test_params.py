@@ -1,0 +1,64 @@
+"""Parameter sets: shipped values, file loading, and refusal of non-physical descriptions."""
+
+from __future__ import annotations
+
+from importlib import resources
+
+import pytest
+import yaml
+
+from biped_gait.model import BipedModel
+from biped_gait.params import load_params, shipped_param_names
+
+
+@pytest.mark.parametrize("name", ["aoustin2013", "aoustin2013-table"])
+def test_total_mass_is_the_tables(name):
+    params = load_params(name)
+    assert params.total_mass == pytest.approx(52.1, abs=1e-12)
+    assert BipedModel.from_params(params).total_mass == pytest.approx(52.1, abs=1e-12)
+
+
+def test_default_set_corrects_only_the_arm_inertia():
+    default, table = load_params(None), load_params("aoustin2013-table")
+    assert default.name == "aoustin2013"
+    assert default.arm.inertia[0] == pytest.approx(4.6 * 0.66**2 / 12, abs=1e-4)
+    assert table.arm.inertia == (0.7414, 0.7414, 0.0)
+    for link in ("shin", "thigh", "trunk"):
+        assert getattr(default, link) == getattr(table, link)
+    assert shipped_param_names() == ["aoustin2013", "aoustin2013-table"]
+
+
+def _edited(tmp_path, edit) -> str:
+    raw = yaml.safe_load(resources.files("biped_gait.data").joinpath("aoustin2013.yaml").read_text())
+    edit(raw)
+    path = tmp_path / "edited.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    return str(path)
+
+
+def test_a_copied_file_loads(tmp_path):
+    path = _edited(tmp_path, lambda raw: raw["links"]["arm"].update(mass=5.0))
+    assert load_params(path).arm.mass == 5.0
+
+
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda raw: raw["links"]["thigh"].pop("mass"), "missing value mass"),
+        (lambda raw: raw["links"].pop("arm"), "missing value links.arm"),
+        (lambda raw: raw["links"]["shin"].update(mass=-4.6), "mass must be positive"),
+        (lambda raw: raw["links"]["trunk"].update(inertia=[11.3, -1.0, 11.3]), "is not physical"),
+        (lambda raw: raw["links"]["arm"].update(inertia=[0.1, 0.1, 0.5]), "is not physical"),
+        (lambda raw: raw["links"]["arm"].update(length=float("nan")), "must be finite"),
+        (lambda raw: raw["geometry"].update(hip_half_width=0.0), "must be positive"),
+        (lambda raw: raw["links"]["shin"].update(com_offset=0.6), "com_offset must lie in"),
+    ],
+)
+def test_non_physical_files_are_refused(tmp_path, edit, message):
+    with pytest.raises(ValueError, match=message):
+        load_params(_edited(tmp_path, edit))
+
+
+def test_unknown_name_is_refused():
+    with pytest.raises(ValueError, match="unknown parameter set 'nope'"):
+        load_params("nope")
