@@ -19,6 +19,7 @@ from .flow import BallisticFlow
 from .model import BipedModel
 
 CLOSURES = ("theta", "slack")
+COARSE_TOL = 1e-9  # rad and kg m^2/s: where Newton on the coarse grid hands over to the fine grid
 
 
 @dataclass
@@ -36,6 +37,7 @@ class BvpSolution:
     end_residual: float
     closure_gap: float
     evaluations: int
+    nodes: tuple | None = None  # fine-grid nodes (t, q, qd, qdd) of the returned trajectory
 
 
 def locked_rotation(bm: BipedModel, q_t: np.ndarray) -> np.ndarray:
@@ -73,6 +75,84 @@ def _closure_gradients(bm: BipedModel, q_t: np.ndarray) -> tuple[np.ndarray, np.
     return d_a, -row[3:]
 
 
+class _Shooting:
+    """The residual F(u) of the shooting problem, u = [qd(0), theta], and its exact Jacobian."""
+
+    def __init__(self, bm: BipedModel, step_length: float, period: float, alpha: float, mode: GaitMode):
+        self.bm, self.period = bm, period
+        self.ends = lambda theta: boundary_configurations(step_length, bm.params.leg_length, alpha, mode, theta)
+        self.evaluations = 0
+
+    def __call__(self, flow: BallisticFlow, u: np.ndarray, with_theta: bool, jacobian: bool, keep_nodes: bool = False):
+        """F (9 or 10), the flow's result, and dF/du when ``jacobian`` (else None)."""
+        n_unknown = 10 if with_theta else 9
+        theta = u[9]
+        q0, q_t = self.ends(theta)
+        seeds = None
+        if jacobian:
+            seeds = np.zeros((18, n_unknown))
+            seeds[9:, :9] = np.eye(9)
+            if with_theta:
+                seeds[:9, 9] = THETA_DIRECTION
+        res = flow.propagate(q0, u[:9], self.period, seeds, keep_nodes)
+        self.evaluations += res.evaluations
+        f = res.q - q_t
+        if with_theta:
+            f = np.append(f, closure_gap(self.bm, q_t, u[:9], res.qd))
+        if not jacobian:
+            return f, res, None
+        jac = np.zeros((n_unknown, n_unknown))
+        jac[:9] = res.sens[:9]
+        if with_theta:
+            jac[:9, 9] -= THETA_DIRECTION
+            d_a, d_b = _closure_gradients(self.bm, q_t)
+            jac[9, :9] = d_a + d_b @ res.sens[9:, :9]
+            # The gap's explicit dependence on theta through the configuration q_T(theta) is a
+            # smooth algebraic function: a central difference resolves it to ~1e-10 relative.
+            h = 1e-6
+            gap = lambda th: closure_gap(self.bm, self.ends(th)[1], u[:9], res.qd)  # noqa: E731
+            jac[9, 9] = (gap(theta + h) - gap(theta - h)) / (2 * h) + d_b @ res.sens[9:, 9]
+        return f, res, jac
+
+
+def _max_norm(f: np.ndarray) -> float:
+    return float(np.max(np.abs(f))) if np.all(np.isfinite(f)) else math.inf
+
+
+def _newton(system: _Shooting, flow: BallisticFlow, u: np.ndarray, with_theta: bool, tol: float, max_iter: int):
+    """Damped Newton with the exact Jacobian: (u, converged, message, iterations, last jacobian)."""
+    n = 10 if with_theta else 9
+    f, _, jac = system(flow, u, with_theta, True)
+    norm = _max_norm(f)
+    for iteration in range(max_iter + 1):
+        if not math.isfinite(norm):
+            return u, False, "the integration diverged (non-finite state)", iteration, jac
+        if norm < tol:
+            return u, True, "converged", iteration, jac
+        if iteration == max_iter:
+            break
+        try:
+            step = np.linalg.solve(jac, -f)
+        except np.linalg.LinAlgError:
+            return u, False, "singular shooting Jacobian", iteration, jac
+        # Backtracking on the max-norm of the residual. The full step carries its Jacobian
+        # unless quadratic convergence predicts it is the last one (residual ~ 10 norm^2).
+        lam = 1.0
+        last_expected = 10.0 * norm * norm < tol
+        while True:
+            trial = u.copy()
+            trial[:n] += lam * step
+            f_new, _, jac_new = system(flow, trial, with_theta, lam == 1.0 and not last_expected)
+            new_norm = _max_norm(f_new)
+            if new_norm < (1 - 1e-4 * lam) * norm or lam < 1e-3:
+                break
+            lam *= 0.5
+        u, f, norm = trial, f_new, new_norm
+        if math.isfinite(norm) and norm >= tol:
+            jac = jac_new if jac_new is not None else system(flow, u, with_theta, True)[2]
+    return u, False, f"no convergence in {max_iter} Newton iterations", max_iter, jac
+
+
 def solve_bvp(
     bm: BipedModel,
     flow: BallisticFlow,
@@ -84,96 +164,72 @@ def solve_bvp(
     guess: tuple[np.ndarray, float] | None = None,
     tol: float = 1e-12,
     max_iter: int = 30,
+    coarse: BallisticFlow | None = None,
 ) -> BvpSolution:
-    """Solve the shooting problem; ``guess`` = (qd(0), theta) warm-starts it.
+    """Solve the shooting problem on ``flow``'s grid; ``guess`` = (qd(0), theta) warm-starts it.
 
-    Without a guess, Newton starts from the straight-line velocity (q_T - q_0) / T and
-    theta = 0, which leads to the human-like branch (swing knee flexion q9 >= 0).
+    Without a guess, Newton starts from the straight-line velocity (q_T - q_0) / T with
+    theta = 0 held fixed, which leads to the human-like branch (swing knee flexion q9 >= 0);
+    the ``theta`` closure then frees theta from there (started cold with theta free, Newton
+    may reach the twin solution with the swing knee bent backwards).
+
+    With a ``coarse`` flow, Newton's iterations run on the coarse grid and the solution is
+    finished on ``flow``'s grid by chord steps with the coarse Jacobian, which the two grids
+    share to within the coarse grid's error; if that stalls, Newton continues on the fine grid.
     ``tol`` bounds the end-point residual (rad) and the closure gap (kg m^2/s).
     """
     if closure not in CLOSURES:
         raise ValueError(f"unknown closure {closure!r}: use 'theta' or 'slack'")
-    leg = bm.params.leg_length
     with_theta = closure == "theta"
-
-    def ends(theta: float) -> tuple[np.ndarray, np.ndarray]:
-        return boundary_configurations(step_length, leg, arm_amplitude, mode, theta)
-
+    n = 10 if with_theta else 9
+    system = _Shooting(bm, step_length, period, arm_amplitude, mode)
+    newton_flow = coarse or flow
+    # On the coarse grid, converging further than its own discretization error gains nothing.
+    newton_tol = max(tol, COARSE_TOL) if coarse is not None else tol
+    iterations = 0
     if guess is None:
-        q0, q_t = ends(0.0)
+        q0, q_t = system.ends(0.0)
         u = np.concatenate([(q_t - q0) / period, [0.0]])
+        if with_theta:
+            u, ok, message, its, _ = _newton(system, newton_flow, u, False, newton_tol, max_iter)
+            iterations += its
+            if not ok:
+                return _solution(system, flow, u, with_theta, False, f"{message} (theta = 0 stage)", iterations)
     else:
         u = np.concatenate([np.asarray(guess[0], float), [guess[1] if with_theta else 0.0]])
-    n_unknown = 10 if with_theta else 9
-    seeds = np.zeros((18, n_unknown))
-    seeds[9:, :9] = np.eye(9)
-    if with_theta:
-        seeds[:9, 9] = THETA_DIRECTION
-    evaluations = 0
-
-    def residual(u: np.ndarray, jacobian: bool):
-        nonlocal evaluations
-        theta = u[9]
-        q0, q_t = ends(theta)
-        res = flow.propagate(q0, u[:9], period, seeds if jacobian else None)
-        evaluations += res.evaluations
-        f = res.q - q_t
-        if with_theta:
-            f = np.append(f, closure_gap(bm, q_t, u[:9], res.qd))
-        if not jacobian:
-            return f, res, None
-        jac = np.zeros((n_unknown, n_unknown))
-        jac[:9] = res.sens[:9]
-        if with_theta:
-            jac[:9, 9] -= THETA_DIRECTION
-            d_a, d_b = _closure_gradients(bm, q_t)
-            jac[9, :9] = d_a + d_b @ res.sens[9:, :9]
-            # The gap's explicit dependence on theta through the configuration q_T(theta) is a
-            # smooth algebraic function: a central difference resolves it to ~1e-10 relative.
-            h = 1e-6
-            explicit = (
-                closure_gap(bm, ends(theta + h)[1], u[:9], res.qd) - closure_gap(bm, ends(theta - h)[1], u[:9], res.qd)
-            ) / (2 * h)
-            jac[9, 9] = explicit + d_b @ res.sens[9:, 9]
-        return f, res, jac
-
-    message = f"no convergence in {max_iter} Newton iterations"
-    converged = False
-    f, res, jac = residual(u, True)
-    norm = float(np.max(np.abs(f)))
-    iterations = 0
-    while True:
-        if not math.isfinite(norm):
-            message = "the integration diverged (non-finite state)"
-            break
+    u, ok, message, its, jac = _newton(system, newton_flow, u, with_theta, newton_tol, max_iter)
+    iterations += its
+    if not ok or coarse is None:
+        return _solution(system, flow, u, with_theta, ok, message, iterations)
+    # Chord steps on the fine grid with the coarse Jacobian: linear convergence at the rate of
+    # the grids' Jacobian mismatch (about the coarse grid's relative error).
+    f, res, _ = system(flow, u, with_theta, False, keep_nodes=True)
+    norm = _max_norm(f)
+    for _ in range(6):
         if norm < tol:
-            converged, message = True, "converged"
+            return _solution(system, flow, u, with_theta, True, "converged", iterations, res)
+        trial = u.copy()
+        trial[:n] -= np.linalg.solve(jac, f)
+        f_new, res_new, _ = system(flow, trial, with_theta, False, keep_nodes=True)
+        new_norm = _max_norm(f_new)
+        if not new_norm < 0.1 * norm:
             break
-        if iterations == max_iter:
-            break
-        iterations += 1
-        try:
-            step = np.linalg.solve(jac, -f)
-        except np.linalg.LinAlgError:
-            message = "singular shooting Jacobian"
-            break
-        # Backtracking on the max-norm of the residual; the full step carries its Jacobian.
-        lam = 1.0
-        while True:
-            trial = u.copy()
-            trial[:n_unknown] += lam * step
-            f_new, res_new, jac_new = residual(trial, lam == 1.0)
-            new_norm = float(np.max(np.abs(f_new))) if np.all(np.isfinite(f_new)) else math.inf
-            if new_norm < (1 - 1e-4 * lam) * norm or lam < 1e-3:
-                break
-            lam *= 0.5
         u, f, res, norm = trial, f_new, res_new, new_norm
-        if math.isfinite(norm) and norm >= tol:
-            jac = jac_new if jac_new is not None else residual(u, True)[2]
+        iterations += 1
+    u, ok, message, its, _ = _newton(system, flow, u, with_theta, tol, max_iter)
+    return _solution(system, flow, u, with_theta, ok, message, iterations + its)
+
+
+def _solution(system: _Shooting, flow: BallisticFlow, u: np.ndarray, with_theta: bool, ok: bool, message: str,
+              iterations: int, res=None) -> BvpSolution:
+    """Package the outcome; ``res`` is the fine-grid flow at ``u`` if already computed."""
+    if res is None or res.nodes is None:
+        _, res, _ = system(flow, u, with_theta, False, keep_nodes=True)
     theta = float(u[9]) if with_theta else 0.0
-    q0, q_t = ends(theta)
+    q0, q_t = system.ends(theta)
+    finite = np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.qd))
     return BvpSolution(
-        converged=converged,
+        converged=ok,
         message=message,
         iterations=iterations,
         theta=theta,
@@ -181,7 +237,8 @@ def solve_bvp(
         q_target=q_t,
         qd_a=u[:9].copy(),
         qd_b=res.qd.copy(),
-        end_residual=float(np.max(np.abs(res.q - q_t))),
-        closure_gap=closure_gap(bm, q_t, u[:9], res.qd),
-        evaluations=evaluations,
+        end_residual=float(np.max(np.abs(res.q - q_t))) if finite else math.inf,
+        closure_gap=closure_gap(system.bm, q_t, u[:9], res.qd) if finite else math.inf,
+        evaluations=system.evaluations,
+        nodes=res.nodes,
     )

@@ -56,20 +56,6 @@ class BallisticFlow:
         """qdd (rad/s^2) of the ballistic dynamics at (q, qd), by ABA."""
         return pin.aba(self.model, self.data, q, qd, self._tau).copy()
 
-    def _derivative(self, z: np.ndarray, with_sens: bool) -> np.ndarray:
-        """d/dt of z = [[q, Sq], [qd, Sv]] (18 x (1 + k)): the state and its variations."""
-        n = self.nq
-        q, qd = z[:n, 0], z[n:, 0]
-        out = np.empty_like(z)
-        out[:n] = z[n:]
-        if with_sens:
-            pin.computeABADerivatives(self.model, self.data, q, qd, self._tau)
-            out[n:, 0] = self.data.ddq
-            out[n:, 1:] = self.data.ddq_dq @ z[:n, 1:] + self.data.ddq_dv @ z[n:, 1:]
-        else:
-            out[n:, 0] = pin.aba(self.model, self.data, q, qd, self._tau)
-        return out
-
     def propagate(
         self,
         q0: np.ndarray,
@@ -84,34 +70,54 @@ class BallisticFlow:
         returned in ``FlowResult.sens``. ``keep_nodes`` also returns the state at every node.
         """
         n = self.nq
-        with_sens = seeds is not None
         k = 0 if seeds is None else seeds.shape[1]
-        z = np.zeros((2 * n, 1 + k))
+        cols = 1 + k
+        # z holds [[q, Sq], [qd, Sv]] (18 x cols), flattened row-major; stages likewise.
+        z = np.empty((2 * n, cols))
         z[:n, 0], z[n:, 0] = q0, qd0
-        if with_sens:
+        if k:
             z[:, 1:] = seeds
+        z = z.ravel()
+        size = z.size
+        stages = np.empty((_STAGES, size))
         h = duration / self.steps
-        stages = np.empty((_STAGES,) + z.shape)
-        nodes_t = np.linspace(0.0, duration, self.steps + 1) if keep_nodes else None
-        nodes_q = np.empty((self.steps + 1, n)) if keep_nodes else None
-        nodes_qd = np.empty((self.steps + 1, n)) if keep_nodes else None
-        nodes_qdd = np.empty((self.steps + 1, n)) if keep_nodes else None
-        evaluations = 0
-        for step in range(self.steps):
-            stages[0] = self._derivative(z, with_sens)
-            if keep_nodes:
-                nodes_q[step], nodes_qd[step], nodes_qdd[step] = z[:n, 0], z[n:, 0], stages[0][n:, 0]
-            for i in range(1, _STAGES):
-                stages[i] = self._derivative(z + h * np.tensordot(_A[i, :i], stages[:i], axes=1), with_sens)
-            z = z + h * np.tensordot(_B, stages, axes=1)
-            evaluations += _STAGES
+        a_h = _A * h
+        b_h = _B * h
+        split = n * cols
+        model, data, tau = self.model, self.data, self._tau
         if keep_nodes:
-            nodes_q[-1], nodes_qd[-1] = z[:n, 0], z[n:, 0]
-            nodes_qdd[-1] = self.acceleration(z[:n, 0], z[n:, 0])
+            nodes_q = np.empty((self.steps + 1, n))
+            nodes_qd = np.empty((self.steps + 1, n))
+            nodes_qdd = np.empty((self.steps + 1, n))
+        for step in range(self.steps):
+            y = z
+            for i in range(_STAGES):
+                if i:
+                    y = z + a_h[i, :i] @ stages[:i]
+                out = stages[i].reshape(2 * n, cols)
+                state = y.reshape(2 * n, cols)
+                out[:n] = state[n:]
+                if k:
+                    ddq_dq, ddq_dv, _ = pin.computeABADerivatives(model, data, state[:n, 0], state[n:, 0], tau)
+                    out[n:, 0] = data.ddq
+                    out[n:, 1:] = ddq_dq @ state[:n, 1:] + ddq_dv @ state[n:, 1:]
+                else:
+                    out[n:, 0] = pin.aba(model, data, state[:n, 0], state[n:, 0], tau)
+            if keep_nodes:
+                state = z.reshape(2 * n, cols)
+                nodes_q[step], nodes_qd[step] = state[:n, 0], state[n:, 0]
+                nodes_qdd[step] = stages[0][split:].reshape(n, cols)[:, 0]
+            z = z + b_h @ stages
+        state = z.reshape(2 * n, cols)
+        evaluations = self.steps * _STAGES
+        nodes = None
+        if keep_nodes:
+            nodes_q[-1], nodes_qd[-1] = state[:n, 0], state[n:, 0]
+            nodes_qdd[-1] = self.acceleration(state[:n, 0], state[n:, 0])
             evaluations += 1
-        nodes = (nodes_t, nodes_q, nodes_qd, nodes_qdd) if keep_nodes else None
+            nodes = (np.linspace(0.0, duration, self.steps + 1), nodes_q, nodes_qd, nodes_qdd)
         return FlowResult(
-            z[:n, 0].copy(), z[n:, 0].copy(), z[:, 1:].copy() if with_sens else None, evaluations, nodes
+            state[:n, 0].copy(), state[n:, 0].copy(), state[:, 1:].copy() if k else None, evaluations, nodes
         )
 
 

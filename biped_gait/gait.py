@@ -23,7 +23,8 @@ from .params import BipedParams, load_params
 from .reports import StepTrajectory, step_figures
 from .result import GaitResult
 
-DEFAULT_STEPS = 32
+DEFAULT_STEPS = 32  # RK8 steps per ballistic step: end state within ~1e-10 of an adaptive solver
+COARSE_STEPS = 16  # grid of Newton's iterations, finished on the fine grid by chord steps
 DEFAULT_SAMPLES = 91
 
 
@@ -76,10 +77,17 @@ class GaitPlanner:
     Not thread-safe (Pinocchio data are reused): give each thread or process its own planner.
     """
 
-    def __init__(self, params: BipedParams | str | None = None, steps: int = DEFAULT_STEPS, samples: int = DEFAULT_SAMPLES):
+    def __init__(
+        self,
+        params: BipedParams | str | None = None,
+        steps: int = DEFAULT_STEPS,
+        coarse_steps: int = COARSE_STEPS,
+        samples: int = DEFAULT_SAMPLES,
+    ):
         self.params = params if isinstance(params, BipedParams) else load_params(params)
         self.model = BipedModel.from_params(self.params)
         self.flow = BallisticFlow(self.model.single, steps)
+        self.coarse_flow = BallisticFlow(self.model.single, coarse_steps) if coarse_steps < steps else None
         self.samples = samples
 
     def plan(self, request: GaitRequest, guess: tuple[np.ndarray, float] | None = None) -> GaitResult:
@@ -93,15 +101,7 @@ class GaitPlanner:
         step_length, period, alpha, mode = validate_request(request, self.params)
         start = time.perf_counter()
         bm = self.model
-        args = (bm, self.flow, step_length, period, alpha, mode)
-        if guess is None and request.closure == "theta":
-            # theta = 0 first: from the straight-line guess this lands on the human-like branch,
-            # which the full system then refines (cold, the full system may reach the twin).
-            first = solve_bvp(*args, closure="slack")
-            bvp = solve_bvp(*args, closure="theta", guess=(first.qd_a, 0.0)) if first.converged else first
-            bvp.evaluations += first.evaluations if bvp is not first else 0
-        else:
-            bvp = solve_bvp(*args, closure=request.closure, guess=guess)
+        bvp = solve_bvp(bm, self.flow, step_length, period, alpha, mode, request.closure, guess, coarse=self.coarse_flow)
         result = GaitResult.empty(request, step_length, period, alpha, mode, self.params.name)
         result.fill_bvp(bvp)
         if bvp.converged:
@@ -138,14 +138,11 @@ class GaitPlanner:
             result.new_stance_tip_speed_after = float(np.linalg.norm(j2 @ xd_a))
 
     def _single_support(self, result: GaitResult, bvp: BvpSolution, period: float) -> None:
-        flow = self.flow
-        run = flow.propagate(bvp.q0, bvp.qd_a, period, keep_nodes=True)
-        result.dynamics_evaluations += run.evaluations
         times = np.linspace(0.0, period, self.samples)
-        q, qd = hermite_samples(run.nodes, times)
-        qdd = np.array([flow.acceleration(a, b) for a, b in zip(q, qd)])
+        q, qd = hermite_samples(bvp.nodes, times)
+        qdd = np.array([self.flow.acceleration(a, b) for a, b in zip(q, qd)])
         traj = StepTrajectory(times, q, qd, qdd)
-        energy = self.energy(run.nodes[1], run.nodes[2])
+        energy = self.energy(bvp.nodes[1], bvp.nodes[2])
         result.fill_step(traj, step_figures(self.model, traj, period), float(np.max(np.abs(energy / energy[0] - 1))))
 
     def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:

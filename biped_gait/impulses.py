@@ -92,33 +92,13 @@ class ImpulseSolution:
     duality_gap: float = float("nan")
     extras: dict = field(default_factory=dict)
 
-    @property
-    def xd_minus(self) -> np.ndarray:
-        return self.x[XD_MINUS]
-
-    @property
-    def i_minus(self) -> np.ndarray:
-        return self.x[I_MINUS]
-
-    @property
-    def ir1_minus(self) -> np.ndarray:
-        return self.x[IR1_MINUS]
-
-    @property
-    def xd_plus(self) -> np.ndarray:
-        return self.x[XD_PLUS]
-
-    @property
-    def ir2(self) -> np.ndarray:
-        return self.x[IR2]
-
-    @property
-    def i_plus(self) -> np.ndarray:
-        return self.x[I_PLUS]
-
-    @property
-    def ir2_plus(self) -> np.ndarray:
-        return self.x[IR2_PLUS]
+    xd_minus = property(lambda self: self.x[XD_MINUS], doc="Xd^-: after I^-, before the impact (12)")
+    i_minus = property(lambda self: self.x[I_MINUS], doc="I^-: joint impulses before the impact (N m s)")
+    ir1_minus = property(lambda self: self.x[IR1_MINUS], doc="I_R1^-: old stance tip's reaction (N s)")
+    xd_plus = property(lambda self: self.x[XD_PLUS], doc="Xd^+: just after the passive impact (12)")
+    ir2 = property(lambda self: self.x[IR2], doc="I_R2: the passive impact at the new stance tip (N s)")
+    i_plus = property(lambda self: self.x[I_PLUS], doc="I^+: joint impulses after the impact (N m s)")
+    ir2_plus = property(lambda self: self.x[IR2_PLUS], doc="I_R2^+: new stance tip's reaction to I^+ (N s)")
 
 
 def _reduced_equations(problem: ImpactProblem) -> tuple[np.ndarray, np.ndarray]:

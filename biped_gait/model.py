@@ -136,10 +136,15 @@ class BipedModel:
         pin.computeCentroidalMomentum(model, data, self.extended_state(q), xd)
         p = data.hg.linear.copy()
         com = data.com[0].copy()
-        h_origin = data.hg.angular + np.cross(com, p)
+        h_origin = data.hg.angular + cross(com, p)
         return p, h_origin, com
 
     def vertical_momentum_about(self, q: np.ndarray, xd: np.ndarray, point: np.ndarray) -> float:
         """Angular momentum (kg m^2/s) about the vertical axis through ``point`` (world, m)."""
         p, h_origin, _ = self.momentum(q, xd)
-        return float(h_origin[2] - np.cross(point, p)[2])
+        return float(h_origin[2] - (point[0] * p[1] - point[1] * p[0]))
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b for 3-vectors (np.cross costs ~20 us a call on small arrays)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])

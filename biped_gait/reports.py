@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .model import SWING_TIP, BipedModel
+from .model import SWING_TIP, BipedModel, cross
 
 
 @dataclass
@@ -52,7 +52,7 @@ def ground_reaction_momentum(bm: BipedModel, q: np.ndarray, qd: np.ndarray, qdd:
     com, acom = data.com[0], data.acom[0]
     force = mass * acom - mass * model.gravity.linear
     # d/dt (h_G + c x m v_G) = dh_G + c x m a_G (the v_G x m v_G term is zero).
-    dh_origin = data.dhg.angular + np.cross(com, mass * acom)
+    dh_origin = data.dhg.angular + cross(com, mass * acom)
     return np.array([force[0], force[1], force[2], dh_origin[2]])
 
 
