@@ -20,6 +20,7 @@ setup(
     entry_points={
         "console_scripts": [
             "biped-gait = biped_gait.cli:main",
+            "biped-gait-planner = biped_gait.ros.planner_node:main",
         ],
     },
 )

@@ -83,7 +83,16 @@ class GaitPlanner:
         steps: int = DEFAULT_STEPS,
         coarse_steps: int = COARSE_STEPS,
         samples: int = DEFAULT_SAMPLES,
+        tol: float = 1e-12,
+        max_iter: int = 30,
     ):
+        """``params``: a parameter set, its name or file (None: default); ``steps``/``coarse_steps``:
+        RK8 grids of the fine flow and of Newton's iterations; ``samples``: trajectory samples
+        reported per step; ``tol``: BVP residual bound (rad, kg m^2/s); ``max_iter``: Newton's
+        iteration bound."""
+        if samples < 2:
+            raise ValueError(f"samples must be at least 2, got {samples}")
+        self.tol, self.max_iter = tol, max_iter
         self.params = params if isinstance(params, BipedParams) else load_params(params)
         self.model = BipedModel.from_params(self.params)
         self.flow = BallisticFlow(self.model.single, steps)
@@ -101,7 +110,8 @@ class GaitPlanner:
         step_length, period, alpha, mode = validate_request(request, self.params)
         start = time.perf_counter()
         bm = self.model
-        bvp = solve_bvp(bm, self.flow, step_length, period, alpha, mode, request.closure, guess, coarse=self.coarse_flow)
+        bvp = solve_bvp(bm, self.flow, step_length, period, alpha, mode, request.closure, guess,
+                        tol=self.tol, max_iter=self.max_iter, coarse=self.coarse_flow)
         result = GaitResult.empty(request, step_length, period, alpha, mode, self.params.name)
         result.fill_bvp(bvp)
         if bvp.converged:

@@ -1,0 +1,227 @@
+"""The gait-planner node (entry point ``biped-gait-planner``).
+
+- service ``~/plan_gait`` (biped_gait_interfaces/srv/PlanGait): plan one gait;
+- action ``~/optimize_arm_swing`` (biped_gait_interfaces/action/OptimizeArmSwing): the arm
+  amplitude of least effort, with feedback per amplitude evaluated; cancelable;
+- topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
+  transient-local, depth 1, so a late subscriber gets the latest one;
+- recording (parameter ``record``): every request with its response (PlanGaitCall messages on
+  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``.
+
+A thin node: requests are converted and handed to the core (``GaitPlanner``); nothing a client
+sends can stop it (bad input gets ``success = false`` and a message).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import OrderedDict
+from datetime import datetime, timezone
+
+from . import environment  # noqa: F401  (before rclpy: keep discovery local)
+
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Header
+
+from biped_gait_interfaces.action import OptimizeArmSwing
+from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
+from biped_gait_interfaces.srv import PlanGait
+
+from ..gait import GaitPlanner
+from ..params import DEFAULT_PARAMS, load_params, shipped_param_names
+from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
+from .process import run_node
+from .recorder import McapRecorder
+
+NODE_NAME = "biped_gait_planner"
+PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
+LATCHED = QoSProfile(
+    depth=1,
+    history=HistoryPolicy.KEEP_LAST,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
+
+class GaitPlannerNode(Node):
+    """Serves gait plans and arm-swing optimizations computed by the core."""
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__(NODE_NAME, **kwargs)
+        self._declare_parameters()
+        value = self.get_parameter
+        self._default_params = value("default_params").value
+        load_params(self._default_params)  # refuse to start on a bad default, with its message
+        self._planners: dict[tuple[str, str], GaitPlanner] = {}
+        self._cache: OrderedDict[tuple, GaitPlan] = OrderedDict()
+        self._cache_lock = threading.Lock()
+        self._sequence = 0
+        self.plan_publisher = self.create_publisher(GaitPlan, "~/gait_plan", LATCHED)
+        # One group each: the service keeps answering while an optimization runs; each group
+        # owns its planners (Pinocchio data are not shared between threads).
+        self._service_group = MutuallyExclusiveCallbackGroup()
+        self._action_group = MutuallyExclusiveCallbackGroup()
+        self.plan_service = self.create_service(
+            PlanGait, "~/plan_gait", self._on_plan_gait, callback_group=self._service_group
+        )
+        self.optimize_server = ActionServer(
+            self,
+            OptimizeArmSwing,
+            "~/optimize_arm_swing",
+            execute_callback=self._on_optimize,
+            goal_callback=lambda _goal: GoalResponse.ACCEPT,
+            cancel_callback=lambda _goal: CancelResponse.ACCEPT,
+            callback_group=self._action_group,
+        )
+        self.recorder: McapRecorder | None = None
+        if value("record").value:
+            stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
+            self.recorder = McapRecorder(value("record_dir").value, f"planner_{stamp}")
+            self.get_logger().info(f"recording to {self.recorder.path}")
+        self.call_topic = self.resolve_service_name("~/plan_gait") + "/calls"
+
+    def _declare_parameters(self) -> None:
+        def desc(text: str, **ranges) -> ParameterDescriptor:
+            return ParameterDescriptor(description=text, **ranges)
+
+        self.declare_parameter("default_params", DEFAULT_PARAMS,
+                               desc(f"parameter set used when a request names none: {', '.join(shipped_param_names())} "
+                                    "or a YAML file", read_only=True))
+        self.declare_parameter("bvp_tolerance", 1e-12, desc(
+            "bound on the BVP end-point residual (rad) and closure gap (kg m^2/s)",
+            floating_point_range=[FloatingPointRange(from_value=1e-14, to_value=1e-6)], read_only=True))
+        self.declare_parameter("max_iterations", 30, desc(
+            "Newton iterations allowed per solve", integer_range=[IntegerRange(from_value=1, to_value=200, step=1)],
+            read_only=True))
+        self.declare_parameter("trajectory_samples", 91, desc(
+            "samples of the ballistic step in each plan's trajectory",
+            integer_range=[IntegerRange(from_value=2, to_value=2001, step=1)], read_only=True))
+        self.declare_parameter("cache_size", 256, desc(
+            "plans kept for identical requests", integer_range=[IntegerRange(from_value=0, to_value=100000, step=1)],
+            read_only=True))
+        self.declare_parameter("record", True, desc("record requests, responses and plans to MCAP", read_only=True))
+        self.declare_parameter("record_dir", "bags", desc("directory of the recordings", read_only=True))
+
+    def _planner(self, params: str, group: str) -> GaitPlanner:
+        """The planner of ``group`` for parameter set ``params`` (created on first use)."""
+        if params != self._default_params and params not in shipped_param_names():
+            raise ValueError(f"unknown parameter set {params!r}: give one of {', '.join(shipped_param_names())}")
+        key = (group, params)
+        if key not in self._planners:
+            value = self.get_parameter
+            self._planners[key] = GaitPlanner(
+                params,
+                samples=value("trajectory_samples").value,
+                tol=value("bvp_tolerance").value,
+                max_iter=value("max_iterations").value,
+            )
+        return self._planners[key]
+
+    def _header(self) -> Header:
+        return Header(stamp=self.get_clock().now().to_msg(), frame_id=PLAN_FRAME)
+
+    def _on_plan_gait(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+        try:
+            self._answer(request, response)
+        except ValueError as exc:
+            response.success, response.message = False, str(exc)
+        except Exception as exc:  # noqa: BLE001  a solver failure must not take the node down
+            self.get_logger().error(f"plan_gait failed: {exc!r}")
+            response.success, response.message = False, f"internal error: {exc!r}"
+        if not response.success:
+            self.get_logger().warn(f"plan_gait refused: {response.message}")
+        self._record_call(request, response)
+        return response
+
+    def _answer(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
+        core_request = request_from_msg(request, self._default_params)
+        key = request_key(core_request)
+        with self._cache_lock:
+            cached = self._cache.get(key)
+            if cached is not None:
+                self._cache.move_to_end(key)
+        if cached is not None:
+            response.success, response.message, response.plan = True, "cached", cached
+            return
+        result = self._planner(core_request.params, "service").plan(core_request)
+        plan = plan_msg(result, self._header())
+        response.plan = plan
+        if not result.converged:
+            response.success, response.message = False, result.message or "the ballistic BVP did not converge"
+            return
+        response.success = True
+        response.message = "admissible" if result.admissible else "not admissible: " + "; ".join(result.reasons)
+        with self._cache_lock:
+            self._cache[key] = plan
+            while len(self._cache) > self.get_parameter("cache_size").value:
+                self._cache.popitem(last=False)
+        self.plan_publisher.publish(plan)
+        if self.recorder is not None:
+            self._record(self.plan_publisher.topic_name, plan, transient_local=True)
+
+    def _record_call(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
+        """Record the exchange as a PlanGaitCall; a recording failure is logged, never raised."""
+        if self.recorder is None:
+            return
+        with self._cache_lock:
+            self._sequence += 1
+            sequence = self._sequence
+        fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
+        call = PlanGaitCall(header=self._header(), sequence=sequence, success=response.success,
+                            message=response.message, plan=response.plan, **fields)
+        self._record(self.call_topic, call)
+
+    def _record(self, topic: str, msg, transient_local: bool = False) -> None:
+        try:
+            self.recorder.write(topic, msg, transient_local=transient_local)
+        except Exception as exc:  # noqa: BLE001  the answer matters more than its record
+            self.get_logger().error(f"recording on {topic} failed: {exc!r}")
+
+    def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
+        from ..optimize import optimize_arm_swing  # the core's search; imported with its plotting-free deps
+
+        goal = goal_handle.request
+        result = OptimizeArmSwing.Result()
+        try:
+            mode = mode_from_msg(goal.mode)
+            planner = self._planner(goal.params or self._default_params, "action")
+
+            def on_evaluation(alpha: float, effort: float, progress: float) -> bool:
+                feedback = OptimizeArmSwing.Feedback(progress=float(progress), alpha=alpha, effort=effort)
+                goal_handle.publish_feedback(feedback)
+                return not goal_handle.is_cancel_requested
+
+            found = optimize_arm_swing(
+                planner, goal.step_length, goal.period, mode, (goal.alpha_min, goal.alpha_max), on_evaluation=on_evaluation
+            )
+        except ValueError as exc:
+            goal_handle.abort()
+            result.success, result.message = False, str(exc)
+            return result
+        result.alphas = [float(a) for a in found.alphas]
+        result.efforts = [float(w) if math.isfinite(w) else math.nan for w in found.efforts]
+        if goal_handle.is_cancel_requested or found.canceled:
+            goal_handle.canceled()
+            result.success, result.message = False, "canceled"
+            return result
+        result.success, result.message = True, found.message
+        result.interior = found.interior
+        result.alpha_opt, result.effort_opt, result.theta_opt = found.alpha, found.effort, found.theta
+        goal_handle.succeed()
+        return result
+
+    def close(self) -> None:
+        """Finalize the MCAP recording (called at shutdown, SIGINT and SIGTERM included)."""
+        if self.recorder is not None:
+            self.recorder.close()
+            self.get_logger().info(f"recording finalized: {self.recorder.path}")
+
+
+def main(args: list[str] | None = None) -> int:
+    """Entry point ``biped-gait-planner``: serve until SIGINT or SIGTERM."""
+    return run_node(GaitPlannerNode, "biped-gait-planner", args=args)
