@@ -94,7 +94,8 @@ class _Shooting:
             seeds[9:, :9] = np.eye(9)
             if with_theta:
                 seeds[:9, 9] = THETA_DIRECTION
-        res = flow.propagate(q0, u[:9], self.period, seeds, keep_nodes)
+        with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected and reported
+            res = flow.propagate(q0, u[:9], self.period, seeds, keep_nodes)
         self.evaluations += res.evaluations
         f = res.q - q_t
         if with_theta:

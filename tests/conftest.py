@@ -3,6 +3,13 @@
 from __future__ import annotations
 
 import math
+import os
+import random
+
+# Every ROS process of the test session (this one and the nodes it starts) keeps DDS discovery
+# on this machine and uses a domain of its own, so parallel sessions do not see each other.
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 100)))
 
 import numpy as np
 import pytest

@@ -1,0 +1,68 @@
+"""Helpers for tests over a real DDS middleware: node processes started from their entry
+points, and a client side with its own rclpy context in the test process."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+
+BIN = Path(sys.executable).parent
+
+
+def start_node(entry: str, *ros_args: str, cwd: Path) -> subprocess.Popen:
+    """Start an entry point (e.g. ``biped-gait-planner``) with ``--ros-args`` in its own process."""
+    exe = shutil.which(entry, path=str(BIN))
+    assert exe, f"entry point {entry} is not installed"
+    args = [exe] + (["--ros-args", *ros_args] if ros_args else [])
+    log = open(cwd / f"{entry}.log", "wb")
+    return subprocess.Popen(args, cwd=cwd, stdout=log, stderr=subprocess.STDOUT, env=dict(os.environ))
+
+
+def stop_node(proc: subprocess.Popen, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:
+    """Send ``sig`` and wait; returns the exit status (the process is killed if it hangs)."""
+    if proc.poll() is None:
+        proc.send_signal(sig)
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    return proc.returncode
+
+
+class RosSide:
+    """A client-side rclpy context, node and executor in the test process."""
+
+    def __init__(self, name: str) -> None:
+        self.context = Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def wait(self, done, timeout: float = 30.0) -> None:
+        """Spin until ``done()`` is true; AssertionError after ``timeout`` s."""
+        deadline = time.monotonic() + timeout
+        while not done():
+            assert time.monotonic() < deadline, "timed out waiting"
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def call(self, client, request, timeout: float = 30.0):
+        """Call a service and return its response (spinning this side's executor)."""
+        future = client.call_async(request)
+        self.wait(future.done, timeout)
+        return future.result()
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)

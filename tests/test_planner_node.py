@@ -1,0 +1,181 @@
+"""The gait-planner node in its own process, over Fast DDS: service answers equal the core's,
+bad requests are refused and the node keeps serving, concurrency, the latched plan topic,
+and the MCAP recording read back by independent readers."""
+
+from __future__ import annotations
+
+import math
+import signal
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mcap_ros2.reader import read_ros2_messages
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosbags.highlevel import AnyReader
+
+from biped_gait.gait import GaitRequest
+from biped_gait_interfaces.msg import GaitPlan
+from biped_gait_interfaces.srv import PlanGait
+
+from .conftest import DEFAULT_REQUEST
+from .ros_helpers import RosSide, start_node, stop_node
+
+SERVICE = "/biped_gait_planner/plan_gait"
+TOPIC = "/biped_gait_planner/gait_plan"
+
+
+def plan_request(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5), mode=PlanGait.Request.NORMAL, **kw):
+    return PlanGait.Request(step_length=step_length, period=period, arm_amplitude=arm_amplitude, mode=mode, **kw)
+
+
+@pytest.fixture(scope="module")
+def node_dir(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("planner")
+
+
+@pytest.fixture(scope="module")
+def planner_process(node_dir):
+    proc = start_node("biped-gait-planner", "-p", f"record_dir:={node_dir / 'bags'}", cwd=node_dir)
+    yield proc
+    assert stop_node(proc) == 0, (node_dir / "biped-gait-planner.log").read_text()
+
+
+@pytest.fixture(scope="module")
+def ros(planner_process):
+    side = RosSide("planner_test_client")
+    side.client = side.node.create_client(PlanGait, SERVICE)
+    assert side.client.wait_for_service(timeout_sec=30.0), "planner service did not appear"
+    yield side
+    side.close()
+
+
+def test_service_answer_equals_the_core(ros, planner, default_gait):
+    response = ros.call(ros.client, plan_request())
+    assert response.success, response.message
+    plan = response.plan
+    assert plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
+    assert plan.theta == pytest.approx(default_gait.theta, abs=1e-13)
+    assert np.allclose(plan.i_minus, default_gait.I_minus, atol=1e-10)
+    assert np.allclose(plan.i_plus, default_gait.I_plus, atol=1e-10)
+    assert np.allclose(plan.qd_a, default_gait.qd_a, atol=1e-12)
+    assert plan.converged and plan.admissible
+    assert len(plan.trajectory.points) == len(default_gait.trajectory["t"])
+    assert plan.trajectory.joint_names[0] == "stance_ankle_roll"
+    last = plan.trajectory.points[-1]
+    assert last.time_from_start.sec + 1e-9 * last.time_from_start.nanosec == pytest.approx(0.45, abs=1e-9)
+    assert np.allclose(last.positions, default_gait.qT, atol=1e-9)
+
+
+BAD_REQUESTS = [
+    (plan_request(step_length=float("nan")), "step length must be a finite number"),
+    (plan_request(period=float("inf")), "period must be a finite number"),
+    (plan_request(arm_amplitude=float("-inf")), "arm amplitude must be a finite number"),
+    (plan_request(step_length=2.0), "step length must be in (0, 1.814) m"),
+    (plan_request(step_length=-0.1), "step length must be in"),
+    (plan_request(period=0.0), "period must be positive"),
+    (plan_request(arm_amplitude=math.pi / 2), "arm amplitude must be in [0, 90) deg"),
+    (plan_request(arm_amplitude=-0.01), "arm amplitude must be in [0, 90) deg"),
+    (plan_request(mode=9), "unknown gait mode 9"),
+    (plan_request(params="no-such-set"), "unknown parameter set 'no-such-set'"),
+    (plan_request(params="/etc/hostname"), "unknown parameter set"),
+    (plan_request(closure="loose"), "unknown closure"),
+    (plan_request(effort="l7"), "unknown effort"),
+    (plan_request(period=5.0), "ballistic BVP"),  # a 5 s ballistic step diverges: no convergence
+]
+
+
+def test_bad_requests_are_refused_and_the_node_keeps_serving(ros, default_gait):
+    for request, message in BAD_REQUESTS:
+        response = ros.call(ros.client, request)
+        assert not response.success, message
+        assert message in response.message
+    response = ros.call(ros.client, plan_request(arm_amplitude=math.radians(23.5)))
+    assert response.success and response.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
+
+
+def test_eight_concurrent_clients_all_get_correct_answers(ros, planner):
+    alphas = np.radians(np.linspace(18.0, 30.0, 8))
+    clients = [ros.node.create_client(PlanGait, SERVICE) for _ in alphas]
+    for c in clients:
+        assert c.wait_for_service(timeout_sec=10.0)
+    futures = [c.call_async(plan_request(arm_amplitude=float(a))) for c, a in zip(clients, alphas)]
+    ros.wait(lambda: all(f.done() for f in futures), timeout=60.0)
+    for alpha, future in zip(alphas, futures):
+        response = future.result()
+        assert response.success, response.message
+        expected = planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"))
+        assert response.plan.arm_amplitude == alpha
+        assert response.plan.effort_cost == pytest.approx(expected.W, rel=1e-9)
+    for c in clients:
+        ros.node.destroy_client(c)
+
+
+def test_identical_requests_are_answered_from_the_cache(ros):
+    first = ros.call(ros.client, plan_request(arm_amplitude=0.3))
+    again = ros.call(ros.client, plan_request(arm_amplitude=0.3))
+    assert first.success and again.success and again.message == "cached"
+    assert again.plan.effort_cost == first.plan.effort_cost and again.plan.header == first.plan.header
+
+
+def test_a_late_subscriber_receives_the_latest_plan(ros):
+    response = ros.call(ros.client, plan_request(arm_amplitude=0.35, mode=PlanGait.Request.ANTI_NORMAL))
+    assert response.success
+    received = []
+    qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    sub = ros.node.create_subscription(GaitPlan, TOPIC, received.append, qos)
+    ros.wait(lambda: received, timeout=10.0)
+    assert received[-1].arm_amplitude == 0.35 and received[-1].mode == PlanGait.Request.ANTI_NORMAL
+    assert received[-1].effort_cost == response.plan.effort_cost
+    ros.node.destroy_subscription(sub)
+
+
+def test_graph_shows_the_node_interfaces(ros):
+    ros.wait(lambda: (TOPIC, ["biped_gait_interfaces/msg/GaitPlan"]) in ros.node.get_topic_names_and_types(), 10.0)
+    services = dict(ros.node.get_service_names_and_types())
+    assert services[SERVICE] == ["biped_gait_interfaces/srv/PlanGait"]
+
+
+@pytest.mark.parametrize("stop_signal", [signal.SIGTERM, signal.SIGINT])
+def test_recording_holds_every_call_and_plan(tmp_path, stop_signal):
+    """A node of its own (renamed, so that no other planner answers), a known sequence of calls,
+    then the signal: the file is complete and holds exactly those."""
+    name = f"recorded_planner_{stop_signal}"
+    service, topic = f"/{name}/plan_gait", f"/{name}/gait_plan"
+    proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", f"record_dir:={tmp_path / 'bags'}", cwd=tmp_path)
+    side = RosSide("recording_test_client")
+    try:
+        client = side.node.create_client(PlanGait, service)
+        assert client.wait_for_service(timeout_sec=30.0)
+        sent = [plan_request(arm_amplitude=0.3), plan_request(step_length=float("nan")),
+                plan_request(arm_amplitude=0.3), plan_request(arm_amplitude=0.32, effort="l2")]
+        answers = [side.call(client, r) for r in sent]
+    finally:
+        side.close()
+        assert stop_node(proc, stop_signal) == 0
+    [bag_dir] = list((tmp_path / "bags").iterdir())
+    [mcap_path] = list(bag_dir.glob("*.mcap"))
+    assert (bag_dir / "metadata.yaml").is_file()
+    with AnyReader([mcap_path]) as reader:
+        by_topic: dict[str, list] = {}
+        for conn, _, raw in reader.messages():
+            by_topic.setdefault(conn.topic, []).append(reader.deserialize(raw, conn.msgtype))
+    calls = by_topic[service + "/calls"]
+    assert [c.sequence for c in calls] == [1, 2, 3, 4]
+    for call, request, answer in zip(calls, sent, answers):
+        assert call.success == answer.success and call.message == answer.message
+        assert call.arm_amplitude == request.arm_amplitude and call.effort == request.effort
+        assert math.isnan(call.step_length) == math.isnan(request.step_length)
+        if answer.success:
+            assert call.plan.effort_cost == answer.plan.effort_cost
+    plans = by_topic[topic]
+    assert [p.arm_amplitude for p in plans] == [0.3, 0.32]  # the cached answer is not published again
+    assert plans[1].effort == "l2" and len(plans[1].trajectory.points) == 91
+    # The rosbag2 directory opens too, and the mcap-ros2-support decoder agrees.
+    with AnyReader([bag_dir]) as reader:
+        assert {c.topic: c.msgcount for c in reader.connections} == {service + "/calls": 4, topic: 2}
+    decoded = [m for m in read_ros2_messages(str(mcap_path))]
+    assert len(decoded) == 6
+    assert [m.ros_msg.sequence for m in decoded if m.channel.topic.endswith("/calls")] == [1, 2, 3, 4]
