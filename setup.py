@@ -21,6 +21,7 @@ setup(
         "console_scripts": [
             "biped-gait = biped_gait.cli:main",
             "biped-gait-planner = biped_gait.ros.planner_node:main",
+            "biped-gait-simulator = biped_gait.ros.simulator_node:main",
         ],
     },
 )

@@ -117,3 +117,25 @@ def plan_msg(result: GaitResult, header) -> GaitPlan:
     )
     msg.trajectory.header = header
     return msg
+
+
+def result_from_plan(msg: GaitPlan) -> GaitResult:
+    """The core result a walker needs, from a GaitPlan message (the trajectory is not copied)."""
+    mode = mode_from_msg(msg.mode)
+    result = GaitResult(
+        step_length=msg.step_length,
+        period=msg.period,
+        arm_amplitude=msg.arm_amplitude,
+        mode=mode.value,
+        params=msg.params,
+        closure=msg.closure,
+        effort=msg.effort,
+        converged=msg.converged,
+        admissible=msg.admissible,
+        reasons=list(msg.reasons),
+        theta=msg.theta,
+        W=msg.effort_cost,
+    )
+    result.q0, result.qT = list(msg.q0), list(msg.q_t)
+    result.qd_a, result.qd_b = list(msg.qd_a), list(msg.qd_b)
+    return result

@@ -33,6 +33,7 @@ from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
 from ..gait import GaitPlanner
+from ..optimize import COARSE_STEP, Canceled, NoAdmissibleGait, optimal_arm_amplitude, usable
 from ..params import DEFAULT_PARAMS, load_params, shipped_param_names
 from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
 from .process import run_node
@@ -183,36 +184,40 @@ class GaitPlannerNode(Node):
             self.get_logger().error(f"recording on {topic} failed: {exc!r}")
 
     def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
-        from ..optimize import optimize_arm_swing  # the core's search; imported with its plotting-free deps
-
         goal = goal_handle.request
         result = OptimizeArmSwing.Result()
+        evaluated: list[tuple[float, float]] = []
+        expected = 1 + round((goal.alpha_max - goal.alpha_min) / COARSE_STEP) + 20  # coarse sweep + refinement
+
+        def on_result(gait) -> None:
+            effort = gait.W if usable(gait) else math.nan
+            evaluated.append((gait.arm_amplitude, effort))
+            progress = min(0.99, len(evaluated) / expected)
+            goal_handle.publish_feedback(OptimizeArmSwing.Feedback(progress=progress, alpha=gait.arm_amplitude, effort=effort))
+            if goal_handle.is_cancel_requested:
+                raise Canceled()
+
         try:
-            mode = mode_from_msg(goal.mode)
             planner = self._planner(goal.params or self._default_params, "action")
-
-            def on_evaluation(alpha: float, effort: float, progress: float) -> bool:
-                feedback = OptimizeArmSwing.Feedback(progress=float(progress), alpha=alpha, effort=effort)
-                goal_handle.publish_feedback(feedback)
-                return not goal_handle.is_cancel_requested
-
-            found = optimize_arm_swing(
-                planner, goal.step_length, goal.period, mode, (goal.alpha_min, goal.alpha_max), on_evaluation=on_evaluation
-            )
-        except ValueError as exc:
-            goal_handle.abort()
-            result.success, result.message = False, str(exc)
-            return result
-        result.alphas = [float(a) for a in found.alphas]
-        result.efforts = [float(w) if math.isfinite(w) else math.nan for w in found.efforts]
-        if goal_handle.is_cancel_requested or found.canceled:
+            found = optimal_arm_amplitude(planner, goal.step_length, goal.period, mode_from_msg(goal.mode),
+                                          (goal.alpha_min, goal.alpha_max), on_result=on_result)
+        except Canceled:
             goal_handle.canceled()
-            result.success, result.message = False, "canceled"
-            return result
-        result.success, result.message = True, found.message
-        result.interior = found.interior
-        result.alpha_opt, result.effort_opt, result.theta_opt = found.alpha, found.effort, found.theta
-        goal_handle.succeed()
+            result.message = f"canceled after {len(evaluated)} gaits"
+        except (ValueError, NoAdmissibleGait) as exc:
+            goal_handle.abort()
+            result.message = str(exc)
+        except Exception as exc:  # noqa: BLE001  a solver failure must not take the node down
+            self.get_logger().error(f"optimize_arm_swing failed: {exc!r}")
+            goal_handle.abort()
+            result.message = f"internal error: {exc!r}"
+        else:
+            goal_handle.succeed()
+            result.success, result.message, result.interior = True, found.describe(), found.interior
+            result.alpha_opt, result.effort_opt, result.theta_opt = found.alpha, found.W, found.gait.theta
+        evaluated.sort()
+        result.alphas = [a for a, _ in evaluated]
+        result.efforts = [w for _, w in evaluated]
         return result
 
     def close(self) -> None:

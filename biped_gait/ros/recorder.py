@@ -51,15 +51,21 @@ class McapRecorder:
         self._last = None
         self.closed = False
 
-    def write(self, topic: str, msg, stamp_ns: int | None = None, transient_local: bool = False) -> None:
-        """Record ``msg`` on ``topic`` at ``stamp_ns`` (default: now, ns since the epoch)."""
+    def write(
+        self, topic: str, msg, stamp_ns: int | None = None, transient_local: bool = False, datatype: str | None = None
+    ) -> None:
+        """Record ``msg`` on ``topic`` at ``stamp_ns`` (default: now, ns since the epoch).
+
+        ``msg`` is an rclpy message, or a dict of its fields with ``datatype`` ('pkg/msg/Type')
+        for a type that has no generated code here (tf2_msgs/msg/TFMessage).
+        """
         stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
         with self._lock:
             if self.closed:
                 return
             entry = self._topics.get(topic)
             if entry is None:
-                datatype = type_name(msg)
+                datatype = datatype or type_name(msg)
                 schema = self._writer.register_msgdef(datatype, schema_text(datatype))
                 entry = self._topics[topic] = _Topic(schema, datatype, qos=_latched_qos() if transient_local else [])
             self._writer.write_message(

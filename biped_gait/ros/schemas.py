@@ -21,6 +21,10 @@ PRIMITIVES = {
     "int32", "uint32", "int64", "uint64", "string", "wstring",
 }
 SEPARATOR = "=" * 80
+# Definitions of types no reachable package installs, so that they can still be recorded.
+KNOWN_DEFINITIONS = {
+    "tf2_msgs/TFMessage": "geometry_msgs/TransformStamped[] transforms\n",  # ROS 2 tf2_msgs, verbatim
+}
 _FIELD = re.compile(r"^(?P<type>[A-Za-z0-9_/]+(?:<=\d+)?)(?P<array>\[[^\]]*\])?\s+(?P<rest>\S.*)$")
 
 
@@ -49,7 +53,8 @@ def _find(pkg: str, kind: str, filename: str) -> str:
 
 def _raw_definition(pkg: str, name: str) -> str:
     """Definition text of pkg's message type ``name``."""
-    return _find(pkg, "msg", f"{name}.msg")
+    known = KNOWN_DEFINITIONS.get(f"{pkg}/{name}")
+    return known if known is not None else _find(pkg, "msg", f"{name}.msg")
 
 
 def _qualify(pkg: str, base_type: str) -> str | None:
