@@ -1,8 +1,12 @@
-"""Command line: ``biped-gait plan`` (one gait, printed and optionally saved as JSON) and
-``biped-gait urdf`` (the robot description). Degrees at this edge; SI and radians inside.
+"""Command line: ``biped-gait plan`` (one gait, printed and optionally saved as JSON),
+``biped-gait urdf`` (the robot description), and the arm-swing study: ``sweep`` (grids of
+gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effort),
+``figure`` (the paper's Fig. 4 and Fig. 5) and ``results-page`` (docs/results.md).
+Degrees at this edge; SI and radians inside.
 
 Errors in the input print one line on stderr and exit with status 2; a gait that does not
-converge or is not admissible is printed with its reasons and exits with status 1.
+converge or is not admissible is printed with its reasons and exits with status 1. An
+interrupted sweep (Ctrl-C) keeps the gaits it has in its files and exits with status 130.
 """
 
 from __future__ import annotations
@@ -12,13 +16,109 @@ import math
 import sys
 from pathlib import Path
 
+from tqdm import tqdm
+
+from .executors import open_executor
+from .figures import save, sweep_figures
 from .gait import GaitPlanner, GaitRequest
+from .optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
 from .params import DEFAULT_PARAMS, load_params, shipped_param_names
+from .results_page import write_results_page
+from .study import FIG4_CASES, FIG5_CASE, run_study
+from .sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
+from .sweep_output import SweepFiles
 from .urdf import make_urdf
+
+INTERRUPTED = 130  # exit status after Ctrl-C, as shells report it
+
+
+class _Parser(argparse.ArgumentParser):
+    """Bad usage is one line on stderr and exit status 2, like every other input error."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _add_params(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--params", default=DEFAULT_PARAMS, help=f"parameter set ({', '.join(shipped_param_names())}) or YAML file"
+    )
+
+
+def _add_executor(parser: argparse.ArgumentParser) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    group.add_argument("--scheduler", metavar="ADDRESS",
+                       help="run on this Dask distributed scheduler (e.g. tcp://127.0.0.1:8786) instead")
+
+
+def _add_alpha_step(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--alpha-step", type=float, default=math.degrees(COARSE_STEP), metavar="DEG",
+                        help=f"spacing of the coarse alpha sweep that brackets the minimum (deg), default "
+                        f"{math.degrees(COARSE_STEP):g}")
+
+
+def _add_seed_period(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--seed-period", type=float, metavar="T0",
+                        help="reach the first gait of each alpha sweep by continuation in T from T0 (s), where "
+                        "the straight-line start finds the human-like gait (e.g. 0.45); default: start cold")
+
+
+def _add_axis(parser: argparse.ArgumentParser, flag: str, what: str, default: str) -> None:
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument(f"--{flag}", nargs="+", type=float, metavar="V", help=f"{what}: values, default {default}")
+    group.add_argument(f"--{flag}-range", nargs=3, type=float, metavar=("START", "STOP", "STEP"),
+                       help=f"{what}: START to STOP inclusive, every STEP")
+
+
+def _axis(args: argparse.Namespace, flag: str, what: str) -> tuple[float, ...] | None:
+    """The values of an axis given as a list or as a range; None if neither was given."""
+    values = getattr(args, flag.replace("-", "_"))
+    bounds = getattr(args, flag.replace("-", "_") + "_range")
+    return inclusive_range(*bounds, what) if bounds is not None else values
+
+
+def _study_parsers(sub) -> None:
+    sweep = sub.add_parser("sweep", help="solve a grid of gaits (L, T, alpha, mode) into CSV, JSON and PNG files")
+    _add_axis(sweep, "step-length", "step length L (m)", "0.45")
+    _add_axis(sweep, "period", "step period T (s)", "0.45")
+    _add_axis(sweep, "alpha-deg", "arm amplitude alpha (deg)", "the range 0 45 1.5")
+    sweep.add_argument("--mode", nargs="+", default=["normal", "anti-normal"], help="gait modes, default both")
+    _add_params(sweep)
+    _add_seed_period(sweep)
+    sweep.add_argument("--out", type=Path, default=Path("sweep-results"), metavar="DIR",
+                       help="output folder (sweep.csv, sweep.json, W_vs_alpha_*.png), default sweep-results")
+    _add_executor(sweep)
+    sweep.add_argument("--yes", action="store_true", help=f"run a sweep of more than {MAX_CASES} gaits")
+
+    optimize = sub.add_parser("optimize-arms", help="the arm amplitude of least effort W for one (L, T, mode)")
+    optimize.add_argument("--step-length", type=float, default=0.45, help="step length L (m), default 0.45")
+    optimize.add_argument("--period", type=float, default=0.45, help="step period T (s), default 0.45")
+    optimize.add_argument("--mode", default="normal", help="normal (default) or anti-normal")
+    _add_params(optimize)
+    optimize.add_argument("--alpha-range", nargs=2, type=float, default=[math.degrees(a) for a in ALPHA_RANGE],
+                          metavar=("LOW", "HIGH"), help="arm amplitudes searched (deg), default 0 45")
+    _add_alpha_step(optimize)
+    _add_seed_period(optimize)
+
+    figure = sub.add_parser("figure", help="draw one of the paper's figures as PNG")
+    figure.add_argument("name", choices=("fig4", "fig5"),
+                        help="fig4: W against alpha for L = 0.40, 0.45, 0.50 m (T = 0.45 s); fig5: yaw angular "
+                        "momentum over two steps, L = T = 0.45, the normal gait's optimal alpha")
+    figure.add_argument("--out", type=Path, help="PNG file, default NAME.png")
+    _add_params(figure)
+    _add_alpha_step(figure)
+    _add_executor(figure)
+
+    page = sub.add_parser("results-page", help="compute the study and write the results page with its figures")
+    page.add_argument("--out", type=Path, default=Path("docs/results.md"),
+                      help="the page (figures go beside it), default docs/results.md")
+    _add_alpha_step(page)
+    _add_executor(page)
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="biped-gait",
         description="Ballistic walking gaits of a 3D seven-link biped with swinging arms "
         "(Aoustin & Formal'skii): periodic single support and minimum-effort impulsive double support.",
@@ -41,7 +141,79 @@ def _parser() -> argparse.ArgumentParser:
     urdf = sub.add_parser("urdf", help="print (or write) the URDF of the biped")
     urdf.add_argument("--params", default=DEFAULT_PARAMS, help="parameter set name or YAML file")
     urdf.add_argument("--output", type=Path, help="write to this file instead of stdout")
+    _study_parsers(sub)
     return parser
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    alphas_deg = _axis(args, "alpha-deg", "arm amplitude")
+    grid = SweepGrid.build(
+        load_params(args.params),
+        _axis(args, "step-length", "step length") or (0.45,),
+        _axis(args, "period", "period") or (0.45,),
+        inclusive_range(*ALPHA_RANGE, COARSE_STEP, "arm amplitude") if alphas_deg is None else
+        [math.radians(a) for a in alphas_deg],
+        args.mode,
+        seed_period=args.seed_period,
+        confirmed=args.yes,
+    )
+    files = SweepFiles(args.out, grid)
+    try:
+        with open_executor(args.workers, args.scheduler) as executor, files, tqdm(
+            total=grid.size, unit="gait", desc="sweep", file=sys.stderr
+        ) as bar:
+            for index, results in solve_grid(grid, executor):
+                files.add(index, results)
+                bar.update(len(results))
+    except KeyboardInterrupt:
+        print(f"biped-gait: interrupted: {files.count} of {grid.size} gaits kept in {files.csv_path} and "
+              f"{files.json_path}", file=sys.stderr)
+        return INTERRUPTED
+    results = files.results()
+    figures = sweep_figures(results, args.out)
+    converged = sum(r.converged for r in results)
+    admissible = sum(r.admissible for r in results)
+    print(f"{len(results)} gaits ({converged} converged, {admissible} admissible) written to {files.csv_path} "
+          f"and {files.json_path}; {len(figures)} figures in {args.out}")
+    return 0
+
+
+def _optimize_arms(args: argparse.Namespace) -> int:
+    planner = GaitPlanner(args.params)
+    low, high = (math.radians(a) for a in args.alpha_range)
+    try:
+        optimum = optimal_arm_amplitude(planner, args.step_length, args.period, args.mode, (low, high),
+                                        math.radians(args.alpha_step), args.seed_period)
+    except NoAdmissibleGait as exc:
+        print(f"biped-gait: {exc}", file=sys.stderr)
+        return 1
+    print(optimum.describe())
+    print(f"{optimum.evaluations} arm amplitudes solved")
+    return 0
+
+
+def _figure(args: argparse.Namespace) -> int:
+    params = load_params(args.params)
+    fig4 = args.name == "fig4"
+    out = args.out or Path(f"{args.name}.png")
+    with open_executor(args.workers, args.scheduler) as executor:
+        [study] = run_study(executor, [params], FIG4_CASES if fig4 else (FIG5_CASE,), curves=fig4,
+                            coarse_step=math.radians(args.alpha_step))
+    save(study.fig4() if fig4 else study.fig5(), out)
+    for comparison in study.comparisons.values():
+        print(comparison.normal.describe())
+    print(f"{args.name} written to {out}")
+    return 0
+
+
+def _results_page(args: argparse.Namespace) -> int:
+    with open_executor(args.workers, args.scheduler) as executor:
+        paths = write_results_page(args.out, executor, math.radians(args.alpha_step))
+    print("written: " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+STUDY_COMMANDS = {"sweep": _sweep, "optimize-arms": _optimize_arms, "figure": _figure, "results-page": _results_page}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -55,6 +227,8 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 sys.stdout.write(text)
             return 0
+        if args.command in STUDY_COMMANDS:
+            return STUDY_COMMANDS[args.command](args)
         planner = GaitPlanner(args.params)
         request = GaitRequest(
             step_length=args.step_length,
@@ -68,6 +242,9 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         print(f"biped-gait: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("biped-gait: interrupted", file=sys.stderr)
+        return INTERRUPTED
     print(result.summary())
     if args.json:
         args.json.write_text(result.to_json())

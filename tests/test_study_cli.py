@@ -1,0 +1,139 @@
+"""The study commands as a user runs them (the installed ``biped-gait`` entry point in a
+subprocess): sweeps and their files, bad input, Ctrl-C, optimize-arms, figures, results page."""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+import signal
+import subprocess
+import time
+
+import pytest
+
+from .test_cli import ENTRY, run
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def test_sweep_writes_csv_json_and_figures(tmp_path):
+    out = tmp_path / "out"
+    proc = run("sweep", "--step-length", "0.40", "0.45", "--alpha-deg", "0", "20", "--out", str(out), "--workers", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert f"8 gaits (8 converged, 8 admissible) written to {out}/sweep.csv" in proc.stdout
+    rows = list(csv.DictReader((out / "sweep.csv").open()))
+    assert len(rows) == 8 and {r["mode"] for r in rows} == {"normal", "anti-normal"}
+    assert json.loads((out / "sweep.json").read_text())["complete"] is True
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    assert pngs == ["W_vs_alpha_L0.400_T0.450.png", "W_vs_alpha_L0.450_T0.450.png"]
+    assert all((out / p).read_bytes()[:8] == PNG_SIGNATURE for p in pngs)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["sweep", "--alpha-deg-range", "45", "0", "1.5"], "arm amplitude range is inverted: stop 0 is below start 45"),
+        (["sweep", "--step-length-range", "0.4", "0.5", "0"], "step length range step must be positive, got 0"),
+        (["sweep", "--alpha-deg"], "argument --alpha-deg: expected at least one argument"),
+        (["sweep", "--mode"], "argument --mode: expected at least one argument"),
+        (["sweep", "--alpha-deg-range", "0", "45", "0.01"],
+         "the sweep has 9002 cases (more than 2000): confirm to run it (--yes)"),
+        (["sweep", "--mode", "normal", "sideways"], "unknown gait mode 'sideways'"),
+        (["sweep", "--period", "0"], "period must be positive"),
+        (["sweep", "--workers", "0"], "the number of workers must be at least 1, got 0"),
+        (["sweep", "--step-length", "0.45", "--step-length-range", "0.4", "0.5", "0.05"], "not allowed with argument"),
+        (["optimize-arms", "--alpha-range", "30", "10"], "arm amplitude range is empty or inverted: [30, 10] deg"),
+        (["optimize-arms", "--mode", "hop"], "unknown gait mode 'hop'"),
+        (["figure", "fig6"], "argument name: invalid choice: 'fig6'"),
+        (["plan", "--step-length", "abc"], "argument --step-length: invalid float value: 'abc'"),
+    ],
+)
+def test_bad_input_is_one_line_and_status_2(tmp_path, args, message):
+    out = tmp_path / "never"
+    proc = run(*args, *(["--out", str(out)] if args[0] == "sweep" else []))
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], proc.stderr
+    assert lines[0].startswith("biped-gait")
+    assert proc.stdout == "" and not out.exists()
+
+
+def test_interrupted_sweep_keeps_what_it_computed(tmp_path):
+    """Ctrl-C reaches the whole process group (the command and its workers), as in a terminal."""
+    out = tmp_path / "out"
+    args = ["sweep", "--step-length-range", "0.30", "0.56", "0.02", "--alpha-deg-range", "0", "45", "2.5",
+            "--out", str(out), "--workers", "2"]
+    proc = subprocess.Popen([ENTRY, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and proc.poll() is None:
+            if (out / "sweep.csv").exists() and len((out / "sweep.csv").read_text().splitlines()) > 1:
+                break
+            time.sleep(0.05)
+        assert proc.poll() is None, "the sweep ended before it could be interrupted"
+        os.killpg(proc.pid, signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, stderr
+    match = re.search(r"interrupted: (\d+) of 532 gaits kept in", stderr)
+    assert match, stderr
+    kept = int(match.group(1))
+    assert 0 < kept < 532 and kept % 19 == 0  # whole chains of 19 amplitudes
+    rows = list(csv.DictReader((out / "sweep.csv").open()))
+    document = json.loads((out / "sweep.json").read_text())
+    assert len(rows) == kept == document["cases_written"] == len(document["cases"])
+    assert document["complete"] is False and document["cases_planned"] == 532
+    assert stdout == ""
+
+
+def test_optimize_arms_reports_an_interior_optimum():
+    proc = run("optimize-arms", "--alpha-step", "5")
+    assert proc.returncode == 0, proc.stderr
+    assert re.match(r"optimal arm amplitude alpha\* = 2\d\.\d{3} deg \(normal gait, L = 0.45 m, T = 0.45 s, "
+                    r"params aoustin2013\): W = \d+\.\d{4} N m s", proc.stdout), proc.stdout
+    assert "an interior minimum of W on [0, 45] deg" in proc.stdout
+
+
+def test_optimize_arms_says_when_there_is_no_interior_minimum():
+    proc = run("optimize-arms", "--params", "aoustin2013-table", "--alpha-step", "5")
+    assert proc.returncode == 0, proc.stderr
+    assert "W(alpha) has no interior minimum on [0, 45] deg" in proc.stdout
+    assert "end point alpha = 0.000 deg" in proc.stdout and "This is not an optimum." in proc.stdout
+
+
+def test_optimize_arms_without_any_admissible_gait_exits_1():
+    proc = run("optimize-arms", "--period", "1.5", "--alpha-step", "15")
+    assert proc.returncode == 1
+    assert proc.stderr.startswith("biped-gait: no admissible normal gait at L = 0.45 m, T = 1.5 s")
+
+
+@pytest.mark.parametrize("name, options", [("fig4", ["--alpha-step", "7.5"]), ("fig5", ["--alpha-step", "5"])])
+def test_figure_commands_write_png(tmp_path, name, options):
+    out = tmp_path / "docs" / f"{name}.png"
+    proc = run("figure", name, "--out", str(out), "--workers", "2", *options)
+    assert proc.returncode == 0, proc.stderr
+    assert out.read_bytes()[:8] == PNG_SIGNATURE
+    assert f"{name} written to {out}" in proc.stdout
+    assert proc.stdout.count("optimal arm amplitude alpha*") == (3 if name == "fig4" else 1)
+
+
+def test_results_page_is_generated_with_its_figures(tmp_path):
+    page = tmp_path / "docs" / "results.md"
+    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--workers", "2")
+    assert proc.returncode == 0, proc.stderr
+    text = page.read_text()
+    for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
+                    "## The paper's claims, checked on these numbers",
+                    "## Where the project and the paper differ, and why"):
+        assert heading in text
+    links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
+    assert links == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
+    assert all((page.parent / link).read_bytes()[:8] == PNG_SIGNATURE for link in links)
+    assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
+    assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
+    assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
