@@ -22,6 +22,9 @@ setup(
             "biped-gait = biped_gait.cli:main",
             "biped-gait-planner = biped_gait.ros.planner_node:main",
             "biped-gait-simulator = biped_gait.ros.simulator_node:main",
+            "biped-gait-replay = biped_gait.ros.replay:main",
+            "biped-gait-analyze = biped_gait.analyze:main",
+            "biped-gait-launch = biped_gait.ros.launch:main",
         ],
     },
 )
