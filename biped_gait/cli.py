@@ -141,6 +141,9 @@ def _parser() -> argparse.ArgumentParser:
     urdf = sub.add_parser("urdf", help="print (or write) the URDF of the biped")
     urdf.add_argument("--params", default=DEFAULT_PARAMS, help="parameter set name or YAML file")
     urdf.add_argument("--output", type=Path, help="write to this file instead of stdout")
+    recover_parser = sub.add_parser("recover", help="rebuild a complete MCAP file from a killed recorder's file")
+    recover_parser.add_argument("bag", type=Path, help="the recording's .mcap file or its directory")
+    recover_parser.add_argument("--out", type=Path, help="output .mcap (default: <name>_recovered/<name>_recovered_0.mcap)")
     _study_parsers(sub)
     return parser
 
@@ -213,7 +216,24 @@ def _results_page(args: argparse.Namespace) -> int:
     return 0
 
 
-STUDY_COMMANDS = {"sweep": _sweep, "optimize-arms": _optimize_arms, "figure": _figure, "results-page": _results_page}
+def _recover(args: argparse.Namespace) -> int:
+    from .ros.recorder import is_complete, recover  # MCAP only: no rclpy import
+
+    files = sorted(args.bag.glob("*.mcap")) if args.bag.is_dir() else [args.bag]
+    if not files or not files[0].is_file():
+        raise ValueError(f"no MCAP file at {args.bag}")
+    source = files[0]
+    name = source.stem.removesuffix("_0") + "_recovered"
+    out = args.out or source.parent.parent / name / f"{name}_0.mcap"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    count = recover(source, out)
+    state = "was complete" if is_complete(source) else "was truncated"
+    print(f"{source} {state}; {count} messages written to {out}")
+    return 0
+
+
+STUDY_COMMANDS = {"sweep": _sweep, "optimize-arms": _optimize_arms, "figure": _figure, "results-page": _results_page,
+                  "recover": _recover}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -21,7 +21,6 @@ velocity as the miss, and how far the re-aimed velocity is from the plan's. Ever
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -114,6 +113,7 @@ class Walker:
         self.state = WalkState(np.array(plan.q0), np.array(plan.qd_a),
                                stance_foot=np.array([0.0, -bm.params.hip_half_width, 0.0]))
         self.reaim = reaim
+        self.sample_index = 0  # the next sample is at sample_index / rate in the walk (s)
         self.step_flow = BallisticFlow(bm.single, grid)
         self.next_period = plan.period
         if reaim:
@@ -145,7 +145,6 @@ class Walker:
         h = self.period / self.grid
         t_step, q, qd = 0.0, s.q, s.qd
         samples: list[Sample] = []
-        next_sample = math.ceil(s.t * self.rate - 1e-9) / self.rate
         limit = 2.0 * self.period
         while t_step < limit:
             run = self.flow.propagate(q, qd, h, keep_nodes=True)
@@ -155,16 +154,16 @@ class Walker:
             t_end = t_step + h
             if landed:
                 t_end = self._touchdown_time(nodes)
-            # Samples on [start, touchdown): the touchdown instant opens the next step (post-impact).
-            while next_sample - s.t < t_end - 1e-12 or (not landed and next_sample - s.t <= t_end + 1e-12):
-                tau = next_sample - s.t
+            # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
+            # touchdown instant itself opens the next step (post-impact state).
+            while (tau := self.sample_index / self.rate - s.t) < t_end - 1e-12 or (not landed and tau <= t_end):
                 sq, sqd = hermite_samples(nodes, np.array([tau]))
-                sample = self._sample(next_sample, tau, sq[0], sqd[0])
+                sample = self._sample(s.t + tau, tau, sq[0], sqd[0])
                 samples.append(sample)
+                self.sample_index += 1
                 fall = self._fall(sample)
                 if fall:
                     return StepOutcome(samples, None, fall)
-                next_sample = (round(next_sample * self.rate) + 1) / self.rate
             if landed:
                 end = self.flow.propagate(q, qd, t_end - t_step)
                 try:

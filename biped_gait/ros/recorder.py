@@ -12,6 +12,7 @@ from __future__ import annotations
 import array
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -20,8 +21,9 @@ import yaml
 from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 from mcap.records import Channel, Message, Schema
+from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import Writer as RawWriter
-from mcap_ros2.writer import Writer
+from mcap_ros2._dynamic import serialize_dynamic  # the schema-driven CDR encoder of mcap-ros2-support
 
 from .schemas import schema_text, type_name
 
@@ -30,7 +32,8 @@ DEFAULT_CHUNK_SIZE = 64 * 1024
 
 @dataclass
 class _Topic:
-    schema: object
+    channel: int
+    encode: Callable[[object], bytes]
     type: str
     count: int = 0
     qos: list = field(default_factory=list)
@@ -44,8 +47,10 @@ class McapRecorder:
         self.bag_dir.mkdir(parents=True, exist_ok=False)
         self.path = self.bag_dir / f"{name}_0.mcap"
         self._file = open(self.path, "wb")
-        self._writer = Writer(self._file, chunk_size=chunk_size)
+        self._writer = RawWriter(self._file, chunk_size=chunk_size)
+        self._writer.start(profile="ros2", library="biped_gait")
         self._topics: dict[str, _Topic] = {}
+        self._schemas: dict[str, int] = {}
         self._lock = threading.Lock()
         self._first = None
         self._last = None
@@ -63,18 +68,27 @@ class McapRecorder:
         with self._lock:
             if self.closed:
                 return
-            entry = self._topics.get(topic)
-            if entry is None:
-                datatype = datatype or type_name(msg)
-                schema = self._writer.register_msgdef(datatype, schema_text(datatype))
-                entry = self._topics[topic] = _Topic(schema, datatype, qos=_latched_qos() if transient_local else [])
-            self._writer.write_message(
-                topic, entry.schema, to_plain(msg), log_time=stamp, publish_time=stamp, sequence=entry.count
-            )
+            entry = self._topics.get(topic) or self._add_topic(topic, datatype or type_name(msg), transient_local)
+            data = entry.encode(to_plain(msg))
+            self._writer.add_message(entry.channel, log_time=stamp, data=data, publish_time=stamp, sequence=entry.count)
             self._file.flush()  # a closed chunk reaches the disk now, not when Python's buffer fills
             entry.count += 1
             self._first = stamp if self._first is None else min(self._first, stamp)
             self._last = stamp if self._last is None else max(self._last, stamp)
+
+    def _add_topic(self, topic: str, datatype: str, transient_local: bool) -> _Topic:
+        """Register the schema and the channel; the channel carries its QoS as rosbag2 does."""
+        text = schema_text(datatype)
+        schema = self._schemas.get(datatype)
+        if schema is None:
+            schema = self._schemas[datatype] = self._writer.register_schema(datatype, SchemaEncoding.ROS2, text.encode())
+        qos = _latched_qos() if transient_local else []
+        channel = self._writer.register_channel(
+            topic, MessageEncoding.CDR, schema, metadata={"offered_qos_profiles": yaml.safe_dump(qos)}
+        )
+        encode = serialize_dynamic(datatype, text)[datatype]
+        entry = self._topics[topic] = _Topic(channel, encode, datatype, qos=qos)
+        return entry
 
     def close(self) -> None:
         """Finalize the MCAP file (index, summary) and write metadata.yaml. Idempotent."""
@@ -102,11 +116,11 @@ def to_plain(value):
 
 def _latched_qos() -> list[dict]:
     """rosbag2's description of a reliable, transient-local, keep-last-1 publisher."""
-    infinite = {"sec": 2147483647, "nsec": 4294967295}
+    infinite = lambda: {"sec": 2147483647, "nsec": 4294967295}  # noqa: E731  (fresh dicts: no YAML aliases)
     return [{
         "history": "keep_last", "depth": 1, "reliability": "reliable", "durability": "transient_local",
-        "deadline": infinite, "lifespan": infinite, "liveliness": "automatic",
-        "liveliness_lease_duration": infinite, "avoid_ros_namespace_conventions": False,
+        "deadline": infinite(), "lifespan": infinite(), "liveliness": "automatic",
+        "liveliness_lease_duration": infinite(), "avoid_ros_namespace_conventions": False,
     }]
 
 

@@ -47,7 +47,7 @@ from ..world import BASE_FRAME, WORLD_FRAME, WorldView
 from .conversions import MODE_TO_MSG, result_from_plan
 from .planner_node import LATCHED
 from .process import run_node
-from .recorder import McapRecorder
+from .recorder import DEFAULT_CHUNK_SIZE, McapRecorder
 
 NODE_NAME = "biped_gait_simulator"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
@@ -84,7 +84,7 @@ class SimulatorNode(Node):
         self.recorder: McapRecorder | None = None
         if value("record"):
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
-            self.recorder = McapRecorder(value("record_dir"), f"walk_{stamp}")
+            self.recorder = McapRecorder(value("record_dir"), f"walk_{stamp}", chunk_size=value("chunk_size"))
             self.get_logger().info(f"recording to {self.recorder.bag_dir}")
         self._worker = threading.Thread(target=self._run, name="walker", daemon=True)
         self._worker.start()
@@ -112,6 +112,9 @@ class SimulatorNode(Node):
         self.declare_parameter("reaim", True, desc("re-solve each step from the actual state (the open-loop gait is unstable)"))
         self.declare_parameter("record", True, desc("record everything published, and /tf, to MCAP"))
         self.declare_parameter("record_dir", "bags", desc("directory of the recordings"))
+        self.declare_parameter("chunk_size", DEFAULT_CHUNK_SIZE, desc(
+            "MCAP chunk size (bytes): at most this much is lost if the process is killed",
+            integer_range=[IntegerRange(from_value=1024, to_value=64 * 1024 * 1024, step=1)]))
         self.declare_parameter("exit_when_done", False, desc("end the process when the walk ends"))
 
     # Plan acquisition ---------------------------------------------------------------------
@@ -165,6 +168,8 @@ class SimulatorNode(Node):
             plan = self._obtain_plan()
             self._walk(plan)
         except Exception as exc:  # noqa: BLE001  reported, and the node stays up for inspection
+            if self._stopping():
+                return  # SIGINT/SIGTERM shut the context down under a publish: a stop, not a fall
             self.fell = True
             self.get_logger().error(f"walk aborted: {exc}")
             self._event(GaitEvent.FALL, 0, "", 0.0, message=str(exc), stamp=self.get_clock().now())
@@ -172,6 +177,9 @@ class SimulatorNode(Node):
             self.finished.set()
             if self.get_parameter("exit_when_done").value:
                 self.executor_shutdown()
+
+    def _stopping(self) -> bool:
+        return self._stop.is_set() or not self.context.ok()
 
     def executor_shutdown(self) -> None:
         """End the process's spin (the node's ``exit_when_done``)."""
@@ -188,11 +196,11 @@ class SimulatorNode(Node):
         self.get_logger().info(
             f"walking L = {result.step_length:g} m, T = {result.period:g} s, alpha = {math.degrees(result.arm_amplitude):.2f} deg "
             f"({result.mode}), {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor {self.rtf:g}")
-        while not self._stop.is_set() and (self.steps == 0 or walker.state.step < self.steps):
+        while not self._stopping() and (self.steps == 0 or walker.state.step < self.steps):
             side, foot, step = walker.state.stance_side, walker.state.stance_foot.copy(), walker.state.step
             outcome = walker.walk_step()
             for sample in outcome.samples:
-                if self._stop.is_set():
+                if self._stopping():
                     return
                 if self.rtf > 0:
                     delay = wall0 + sample.t / self.rtf - time.monotonic()
@@ -295,6 +303,13 @@ def _point(v) -> Point:
 
 
 def main(args: list[str] | None = None) -> int:
-    """Entry point ``biped-gait-simulator``: walk, publish and record until done or stopped."""
-    status = run_node(SimulatorNode, "biped-gait-simulator", args=args)
-    return status
+    """Entry point ``biped-gait-simulator``: walk, publish and record until done or stopped.
+    Exit status 1 if the robot fell (or the walk could not start), 0 otherwise."""
+    nodes: list[SimulatorNode] = []
+
+    def make() -> SimulatorNode:
+        nodes.append(SimulatorNode())
+        return nodes[-1]
+
+    status = run_node(make, "biped-gait-simulator", args=args)
+    return 1 if status == 0 and nodes and nodes[0].fell else status

@@ -1,0 +1,95 @@
+"""``biped-gait-launch``: the planner and the simulator as separate processes, like a ROS 2
+launch file (the launch package is not installable here).
+
+Both nodes get ``--ros-args --params-file CONFIG`` (a ROS 2 parameters file with a section per
+node). Ctrl-C and SIGTERM are forwarded to both; when the simulator ends (its walk done, with
+``exit_when_done``), the planner is stopped. Exit status: 0 if both ended cleanly, else the
+first non-zero status. ``--analyze`` then runs ``biped-gait-analyze`` on the new walk recording.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from .environment import DISCOVERY_VARIABLE
+
+PLANNER, SIMULATOR = "biped-gait-planner", "biped-gait-simulator"
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="biped-gait-launch", description=__doc__.splitlines()[0])
+    parser.add_argument("--config", type=Path, help="ROS 2 parameters file with biped_gait_planner and "
+                        "biped_gait_simulator sections (default: the nodes' own defaults)")
+    parser.add_argument("--analyze", action="store_true", help="analyse the simulator's recording afterwards")
+    parser.add_argument("--record-dir", type=Path, default=Path("bags"),
+                        help="where the simulator records (to find the new recording for --analyze)")
+    return parser
+
+
+def _start(entry: str, config: Path | None) -> subprocess.Popen:
+    exe = shutil.which(entry, path=str(Path(sys.executable).parent)) or shutil.which(entry)
+    if exe is None:
+        raise FileNotFoundError(f"entry point {entry} is not installed")
+    args = [exe] + (["--ros-args", "--params-file", str(config)] if config else [])
+    # Own process group: a terminal's Ctrl-C reaches us only; we forward it, in order.
+    return subprocess.Popen(args, env=os.environ, start_new_session=True)
+
+
+def _stop(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout: float = 20.0) -> int:
+    if proc.poll() is None:
+        proc.send_signal(sig)
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    return proc.returncode
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the two nodes; returns the exit status (non-zero if one of them failed)."""
+    args = _parser().parse_args(argv)
+    if args.config is not None and not args.config.is_file():
+        print(f"biped-gait-launch: error: no config file {args.config}", file=sys.stderr)
+        return 2
+    os.environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
+    before = set(args.record_dir.glob("walk_*")) if args.record_dir.is_dir() else set()
+    stopping = []
+
+    def forward(signum, _frame) -> None:
+        stopping.append(signum)
+
+    previous = {sig: signal.signal(sig, forward) for sig in (signal.SIGINT, signal.SIGTERM)}
+    planner = _start(PLANNER, args.config)
+    simulator = _start(SIMULATOR, args.config)
+    try:
+        while simulator.poll() is None and planner.poll() is None and not stopping:
+            time.sleep(0.05)
+    finally:
+        sim_status = _stop(simulator)
+        planner_status = _stop(planner)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    statuses = {SIMULATOR: sim_status, PLANNER: planner_status}
+    failed = {name: code for name, code in statuses.items() if code != 0}
+    if failed:
+        print("biped-gait-launch: " + ", ".join(f"{n} exited with status {c}" for n, c in failed.items()), file=sys.stderr)
+        return next(iter(failed.values())) if not stopping else 130
+    if stopping:
+        return 130
+    if args.analyze:
+        new = sorted(set(args.record_dir.glob("walk_*")) - before)
+        if not new:
+            print("biped-gait-launch: error: the simulator left no new recording to analyse", file=sys.stderr)
+            return 1
+        from ..analyze import main as analyze
+
+        return analyze([str(new[-1])])
+    return 0
