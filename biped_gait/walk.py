@@ -156,14 +156,20 @@ class Walker:
                 t_end = self._touchdown_time(nodes)
             # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
             # touchdown instant itself opens the next step (post-impact state).
-            while (tau := self.sample_index / self.rate - s.t) < t_end - 1e-12 or (not landed and tau <= t_end):
-                sq, sqd = hermite_samples(nodes, np.array([tau]))
-                sample = self._sample(s.t + tau, tau, sq[0], sqd[0])
-                samples.append(sample)
-                self.sample_index += 1
-                fall = self._fall(sample)
-                if fall:
-                    return StepOutcome(samples, None, fall)
+            taus = []
+            while (tau := (self.sample_index + len(taus)) / self.rate - s.t) < t_end - 1e-12 or (
+                not landed and tau <= t_end
+            ):
+                taus.append(tau)
+            if taus:
+                sq, sqd = hermite_samples(nodes, np.array(taus))
+                for tau, q_s, qd_s in zip(taus, sq, sqd):
+                    sample = self._sample(s.t + tau, tau, q_s, qd_s)
+                    samples.append(sample)
+                    self.sample_index += 1
+                    fall = self._fall(sample)
+                    if fall:
+                        return StepOutcome(samples, None, fall)
             if landed:
                 end = self.flow.propagate(q, qd, t_end - t_step)
                 try:

@@ -70,10 +70,12 @@ class WorldView:
         self.urdf_data = self.urdf_model.createData()
         self._pelvis = bm.single.getJointId("stance_hip")
         self._index = {name: self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in PHYSICAL_JOINTS}
-        self._parent_link = {}
-        for jid in range(1, self.urdf_model.njoints):
-            parent = self.urdf_model.parents[jid]
-            self._parent_link[jid] = BASE_FRAME if parent == 0 else self._link_of_joint(parent)
+        # (joint id, parent link, child link) of every moving joint, in the URDF model's order.
+        self._joints = [
+            (jid, BASE_FRAME if self.urdf_model.parents[jid] == 0 else self._link_of_joint(self.urdf_model.parents[jid]),
+             self._link_of_joint(jid))
+            for jid in range(1, self.urdf_model.njoints)
+        ]
 
     def _link_of_joint(self, jid: int) -> str:
         """The URDF link whose frame is joint ``jid``'s frame (its child link)."""
@@ -110,10 +112,9 @@ class WorldView:
             urdf_q[self._index[name]] = value
         pin.forwardKinematics(self.urdf_model, self.urdf_data, urdf_q)
         links = [Transform(WORLD_FRAME, BASE_FRAME, stance_foot + m @ pelvis.translation, _quaternion(rotation))]
-        for jid in range(1, self.urdf_model.njoints):
+        for jid, parent, child in self._joints:
             placement = self.urdf_data.liMi[jid]
-            links.append(Transform(self._parent_link[jid], self._link_of_joint(jid), placement.translation.copy(),
-                                   _quaternion(placement.rotation)))
+            links.append(Transform(parent, child, placement.translation.copy(), _quaternion(placement.rotation)))
         return WorldState(
             joint_names=PHYSICAL_JOINTS,
             joint_positions=[positions[n] for n in PHYSICAL_JOINTS],

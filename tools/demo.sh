@@ -1,7 +1,12 @@
 #!/usr/bin/env bash
-# The README's first command: set everything up, then plan the default gait
-# (L = T = 0.45 s, arm amplitude 23.5 deg, normal arm swing) and print its summary.
+# The README's first command: set everything up (venv, pinned dependencies, ROS interfaces),
+# then run the demo: the planner and the simulator as ROS 2 nodes over Fast DDS (discovery on
+# this machine only), the default gait at L = T = 0.45 s with the optimal arm swing, 20 steps,
+# recorded under bags/, then analysed (summary and plots under the recording's analysis/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup.sh
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-42}
 .venv/bin/biped-gait plan --json bags/default_gait.json
+.venv/bin/biped-gait-launch --config config/demo.yaml --analyze

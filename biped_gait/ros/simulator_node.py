@@ -219,7 +219,9 @@ class SimulatorNode(Node):
                         message=f"touchdown of step {step}")
         self._event(GaitEvent.FINISHED, walker.state.step, walker.state.stance_side, 0.0,
                     message=f"walked {walker.state.step} steps", stamp=start + _duration(walker.state.t))
-        self.get_logger().info(f"walk finished: {walker.state.step} steps, {walker.state.t:.3f} s simulated")
+        wall = time.monotonic() - wall0
+        self.get_logger().info(f"walk finished: {walker.state.step} steps, {walker.state.t:.3f} s simulated in "
+                               f"{wall:.3f} s wall time (real-time factor {walker.state.t / wall:.2f})")
 
     # Publishing ---------------------------------------------------------------------------
     def _publish(self, publisher, msg, stamp_ns: int, transient_local: bool = False) -> None:

@@ -1,0 +1,67 @@
+"""Benchmark: the simulator's real-time factor, publishing at 1 kHz with recording on, as fast
+as possible (real_time_factor 0), 10 steps of the default gait, planner and simulator as real
+node processes. Also times the walker alone (no ROS) for the split. Run:
+
+    .venv/bin/python benchmarks/bench_simulator.py
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.setdefault("ROS_DOMAIN_ID", "92")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from biped_gait.gait import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.walk import Walker  # noqa: E402
+from biped_gait.world import WorldView  # noqa: E402
+from tests.ros_helpers import start_node, stop_node  # noqa: E402
+
+STEPS, RATE = 10, 1000.0
+
+
+def core_only() -> tuple[float, float]:
+    planner = GaitPlanner()
+    plan = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
+    walker, view = Walker(planner.model, plan, RATE), WorldView(planner.model)
+    start = time.perf_counter()
+    world_time = 0.0
+    for _ in range(STEPS):
+        outcome = walker.walk_step()
+        t0 = time.perf_counter()
+        for s in outcome.samples:
+            view.state(s.q, s.qd, walker.state.stance_side, walker.state.stance_foot)
+        world_time += time.perf_counter() - t0
+    wall = time.perf_counter() - start
+    return walker.state.t / (wall - world_time), walker.state.t / wall
+
+
+def main() -> None:
+    walk_rtf, with_world_rtf = core_only()
+    with tempfile.TemporaryDirectory() as tmp:
+        where = Path(tmp)
+        planner = start_node("biped-gait-planner", "-p", "record:=false", cwd=where)
+        sim = start_node("biped-gait-simulator", "-p", f"steps:={STEPS}", "-p", "real_time_factor:=0.0",
+                         "-p", f"publish_rate:={RATE}", "-p", "exit_when_done:=true", "-p", f"record_dir:={where}/bags",
+                         cwd=where)
+        sim.wait(timeout=600)
+        stop_node(planner)
+        log = (where / "biped-gait-simulator.log").read_text()
+    match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
+    assert match, log
+    print(f"simulator, {STEPS} steps at {RATE:g} Hz, as fast as possible:")
+    print(f"  node with publishing and MCAP recording: real-time factor {float(match.group(2)):.2f} "
+          f"({match.group(1)} s wall for {STEPS * 0.45:.2f} s simulated)")
+    print(f"  walker alone (integration, events, double support, samples): real-time factor {walk_rtf:.1f}")
+    print(f"  walker + world view (poses, momenta, link transforms):        real-time factor {with_world_rtf:.1f}")
+
+
+if __name__ == "__main__":
+    main()
