@@ -15,6 +15,8 @@ import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
 
+from biped_gait.ros.launch import stop_process
+
 BIN = Path(sys.executable).parent
 
 
@@ -28,15 +30,8 @@ def start_node(entry: str, *ros_args: str, cwd: Path) -> subprocess.Popen:
 
 
 def stop_node(proc: subprocess.Popen, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:
-    """Send ``sig`` and wait; returns the exit status (the process is killed if it hangs)."""
-    if proc.poll() is None:
-        proc.send_signal(sig)
-        try:
-            proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-    return proc.returncode
+    """Send ``sig`` (default SIGTERM) and wait; returns the exit status (killed if it hangs)."""
+    return stop_process(proc, sig, timeout)
 
 
 class RosSide:

@@ -75,67 +75,47 @@ def trajectory_msg(result: GaitResult) -> JointTrajectory:
     return traj
 
 
+# Fields with the same meaning in GaitResult and GaitPlan: (result attribute, message field).
+SCALARS = (
+    ("step_length", "step_length"), ("period", "period"), ("arm_amplitude", "arm_amplitude"),
+    ("params", "params"), ("closure", "closure"), ("effort", "effort"), ("converged", "converged"),
+    ("admissible", "admissible"), ("theta", "theta"), ("slack", "slack"), ("W", "effort_cost"),
+    ("min_grf_z", "min_grf_z"), ("min_swing_height", "min_swing_height"),
+    ("max_friction_ratio", "max_friction_ratio"), ("closure_residual", "closure_residual"),
+    ("solve_time_s", "solve_time"),
+)
+ARRAYS = (  # (result attribute, message field, fixed size)
+    ("I_minus", "i_minus", 7), ("I_plus", "i_plus", 7), ("Xd_minus", "xd_minus", 12), ("Xd_plus", "xd_plus", 12),
+    ("Xd_a", "xd_a", 12), ("Xd_b", "xd_b", 12), ("q0", "q0", 9), ("qT", "q_t", 9), ("qd_a", "qd_a", 9),
+    ("qd_b", "qd_b", 9), ("H_Tminus", "h_t_minus", 2), ("H_Tplus", "h_t_plus", 2),
+)
+VECTORS = (("IR1_minus", "ir1_minus"), ("IR2", "ir2"), ("IR2_plus", "ir2_plus"))
+
+
 def plan_msg(result: GaitResult, header) -> GaitPlan:
     """GaitPlan message of a core result, stamped with ``header``."""
-    r = result
-    msg = GaitPlan(
-        header=header,
-        step_length=r.step_length,
-        period=r.period,
-        arm_amplitude=r.arm_amplitude,
-        mode=MODE_TO_MSG[GaitMode.parse(r.mode)],
-        params=r.params,
-        closure=r.closure,
-        effort=r.effort,
-        converged=r.converged,
-        admissible=r.admissible,
-        reasons=list(r.reasons),
-        theta=r.theta,
-        slack=r.slack,
-        effort_cost=r.W,
-        i_minus=_fixed(r.I_minus, 7),
-        i_plus=_fixed(r.I_plus, 7),
-        ir1_minus=_vector(r.IR1_minus),
-        ir2=_vector(r.IR2),
-        ir2_plus=_vector(r.IR2_plus),
-        xd_minus=_fixed(r.Xd_minus, 12),
-        xd_plus=_fixed(r.Xd_plus, 12),
-        xd_a=_fixed(r.Xd_a, 12),
-        xd_b=_fixed(r.Xd_b, 12),
-        q0=_fixed(r.q0, 9),
-        q_t=_fixed(r.qT, 9),
-        qd_a=_fixed(r.qd_a, 9),
-        qd_b=_fixed(r.qd_b, 9),
-        min_grf_z=r.min_grf_z,
-        min_swing_height=r.min_swing_height,
-        max_friction_ratio=r.max_friction_ratio,
-        h_t_minus=_fixed(r.H_Tminus, 2),
-        h_t_plus=_fixed(r.H_Tplus, 2),
-        closure_residual=r.closure_residual,
-        solve_time=r.solve_time_s,
-        trajectory=trajectory_msg(r),
-    )
+    msg = GaitPlan(header=header, mode=MODE_TO_MSG[GaitMode.parse(result.mode)], reasons=list(result.reasons),
+                   trajectory=trajectory_msg(result))
+    for attr, name in SCALARS:
+        setattr(msg, name, getattr(result, attr))
+    for attr, name, size in ARRAYS:
+        setattr(msg, name, _fixed(getattr(result, attr), size))
+    for attr, name in VECTORS:
+        setattr(msg, name, _vector(getattr(result, attr)))
     msg.trajectory.header = header
     return msg
 
 
 def result_from_plan(msg: GaitPlan) -> GaitResult:
-    """The core result a walker needs, from a GaitPlan message (the trajectory is not copied)."""
-    mode = mode_from_msg(msg.mode)
-    result = GaitResult(
-        step_length=msg.step_length,
-        period=msg.period,
-        arm_amplitude=msg.arm_amplitude,
-        mode=mode.value,
-        params=msg.params,
-        closure=msg.closure,
-        effort=msg.effort,
-        converged=msg.converged,
-        admissible=msg.admissible,
-        reasons=list(msg.reasons),
-        theta=msg.theta,
-        W=msg.effort_cost,
-    )
-    result.q0, result.qT = list(msg.q0), list(msg.q_t)
-    result.qd_a, result.qd_b = list(msg.qd_a), list(msg.qd_b)
+    """The core result of a GaitPlan message (all figures; the trajectory is not copied)."""
+    result = GaitResult(step_length=msg.step_length, period=msg.period, arm_amplitude=msg.arm_amplitude,
+                        mode=mode_from_msg(msg.mode).value, params=msg.params, closure=msg.closure, effort=msg.effort)
+    result.reasons = list(msg.reasons)
+    for attr, name in SCALARS:
+        setattr(result, attr, getattr(msg, name))
+    for attr, name, _ in ARRAYS:
+        setattr(result, attr, [float(v) for v in getattr(msg, name)])
+    for attr, name in VECTORS:
+        v = getattr(msg, name)
+        setattr(result, attr, [v.x, v.y, v.z])
     return result

@@ -42,7 +42,8 @@ def _start(entry: str, config: Path | None) -> subprocess.Popen:
     return subprocess.Popen(args, env=os.environ, start_new_session=True)
 
 
-def _stop(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout: float = 20.0) -> int:
+def stop_process(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout: float = 20.0) -> int:
+    """Send ``sig`` to a node process and wait for it; kill it if it hangs. Returns its status."""
     if proc.poll() is None:
         proc.send_signal(sig)
         try:
@@ -73,8 +74,8 @@ def main(argv: list[str] | None = None) -> int:
         while simulator.poll() is None and planner.poll() is None and not stopping:
             time.sleep(0.05)
     finally:
-        sim_status = _stop(simulator)
-        planner_status = _stop(planner)
+        sim_status = stop_process(simulator)
+        planner_status = stop_process(planner)
         for sig, handler in previous.items():
             signal.signal(sig, handler)
     statuses = {SIMULATOR: sim_status, PLANNER: planner_status}
