@@ -21,6 +21,8 @@ from datetime import datetime, timezone
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
+import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
+
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -224,7 +226,7 @@ class GaitPlannerNode(Node):
         """Finalize the MCAP recording (called at shutdown, SIGINT and SIGTERM included)."""
         if self.recorder is not None:
             self.recorder.close()
-            self.get_logger().info(f"recording finalized: {self.recorder.path}")
+            rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
 
 
 def main(args: list[str] | None = None) -> int:

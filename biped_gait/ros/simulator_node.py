@@ -24,6 +24,8 @@ from datetime import datetime, timezone
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
+import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
+
 from geometry_msgs.msg import Point, Vector3
 from nav_msgs.msg import Odometry
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
@@ -275,7 +277,7 @@ class SimulatorNode(Node):
         self._worker.join(timeout=10.0)
         if self.recorder is not None:
             self.recorder.close()
-            self.get_logger().info(f"recording finalized: {self.recorder.bag_dir}")
+            rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.bag_dir}")
 
 
 def _duration(seconds: float):
