@@ -20,6 +20,7 @@ from tqdm import tqdm
 
 from .executors import open_executor
 from .figures import save, sweep_figures
+from .arguments import OneLineParser
 from .gait import GaitPlanner, GaitRequest
 from .optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
 from .params import DEFAULT_PARAMS, load_params, shipped_param_names
@@ -30,13 +31,6 @@ from .sweep_output import SweepFiles
 from .urdf import make_urdf
 
 INTERRUPTED = 130  # exit status after Ctrl-C, as shells report it
-
-
-class _Parser(argparse.ArgumentParser):
-    """Bad usage is one line on stderr and exit status 2, like every other input error."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def _add_params(parser: argparse.ArgumentParser) -> None:
@@ -118,7 +112,7 @@ def _study_parsers(sub) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = _Parser(
+    parser = OneLineParser(
         prog="biped-gait",
         description="Ballistic walking gaits of a 3D seven-link biped with swinging arms "
         "(Aoustin & Formal'skii): periodic single support and minimum-effort impulsive double support.",

@@ -14,6 +14,7 @@ from pathlib import Path
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
+from rosbags.highlevel import AnyReader
 
 from biped_gait.ros.launch import stop_process
 
@@ -32,6 +33,15 @@ def start_node(entry: str, *ros_args: str, cwd: Path) -> subprocess.Popen:
 def stop_node(proc: subprocess.Popen, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:
     """Send ``sig`` (default SIGTERM) and wait; returns the exit status (killed if it hangs)."""
     return stop_process(proc, sig, timeout)
+
+
+def read_bag(bag_dir: Path) -> dict[str, list]:
+    """Every message of a recording, by topic: [(log time ns, decoded message)], read by rosbags."""
+    with AnyReader([bag_dir]) as reader:
+        out: dict[str, list] = {}
+        for conn, stamp, raw in reader.messages():
+            out.setdefault(conn.topic, []).append((stamp, reader.deserialize(raw, conn.msgtype)))
+    return out
 
 
 class RosSide:

@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 from mcap_ros2.reader import read_ros2_messages
 from nav_msgs.msg import Odometry
-from rosbags.highlevel import AnyReader
 from sensor_msgs.msg import JointState
 
 from biped_gait.cli import main as cli_main
@@ -21,7 +20,7 @@ from biped_gait.ros.recorder import is_complete
 from biped_gait.urdf import PHYSICAL_JOINTS
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from .ros_helpers import RosSide, start_node, stop_node
+from .ros_helpers import RosSide, read_bag, start_node, stop_node
 
 PLANNER = "sim_test_planner"
 
@@ -40,14 +39,6 @@ def simulator(where: Path, *params: str) -> subprocess.Popen:
     for p in params:
         args += ["-p", p]
     return start_node("biped-gait-simulator", *args, cwd=where)
-
-
-def read_bag(bag_dir: Path) -> dict[str, list]:
-    with AnyReader([bag_dir]) as reader:
-        out: dict[str, list] = {}
-        for conn, stamp, raw in reader.messages():
-            out.setdefault(conn.topic, []).append((stamp, reader.deserialize(raw, conn.msgtype)))
-    return out
 
 
 @pytest.fixture(scope="module")

@@ -1,0 +1,219 @@
+"""Replay of a recording (entry point ``biped-gait-replay``), like ``ros2 bag play``:
+``biped-gait-replay BAG [--rate R] [--loop] [--topics T1 T2 ...] [--start-paused]``.
+
+BAG is a rosbag2 directory or a bare ``.mcap`` file. Each message is published on its topic,
+as the CDR bytes recorded, at ``start + (log time - first log time) / R`` on the monotonic
+clock, ``start`` being when playback begins: at once, or with ``--start-paused`` when the
+service ``~/resume`` (std_srvs/Trigger) is called, e.g. once subscribers see the publishers
+(DDS discovery between processes takes from milliseconds to seconds). Publishers have the
+message class of the recorded type and the QoS the recording's publishers offered
+(metadata.yaml; transient-local for ``/robot_description``). Topics whose type has no Python
+code here (``/tf``, ``/tf_static``: tf2_msgs) are skipped with one warning line.
+
+Exit status: 0 at the end of the recording (``--loop``: replays until stopped) or on SIGINT /
+SIGTERM; 2 with one line on stderr for a missing or unreadable recording, unknown
+``--topics``, a bad rate or nothing publishable; 1 if reading fails during playback.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import sys
+import threading
+import time
+from pathlib import Path
+
+from . import environment  # noqa: F401  (before rclpy: keep discovery local)
+
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.utilities import remove_ros_args
+from std_srvs.srv import Trigger
+
+from ..analyze import Bag, BagError, open_bag
+from ..arguments import OneLineParser
+from .process import run_node
+
+PROGRAM = "biped-gait-replay"
+NODE_NAME = "biped_gait_replay"
+DEFAULT_DEPTH = 100  # keep-last depth of topics recorded without QoS profiles
+
+
+def message_class(datatype: str) -> type | None:
+    """The rclpy message class of 'pkg/msg/Type' (or 'pkg/Type'); None if not installed here."""
+    parts = datatype.split("/")
+    if len(parts) not in (2, 3):
+        return None
+    package, name = parts[0], parts[-1]
+    kind = parts[1] if len(parts) == 3 else "msg"
+    try:
+        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+    except (ImportError, AttributeError):
+        return None
+
+
+def _policy(enum: type, value: str | int | None):
+    """A QoS policy as rosbag2 writes it: its short name ('reliable') or its number."""
+    if value is None:
+        return enum.SYSTEM_DEFAULT
+    return enum[value.upper()] if isinstance(value, str) else enum(value)
+
+
+def replay_qos(offered: list[dict]) -> QoSProfile:
+    """The QoS to replay a topic with, adapted from what its recorded publishers offered (as
+    ``ros2 bag play`` does): reliable, transient-local only if all of them were; keep-all if
+    one was, else keep-last with the largest depth. None recorded: reliable, volatile,
+    keep-last ``DEFAULT_DEPTH``."""
+    if not offered:
+        return QoSProfile(depth=DEFAULT_DEPTH)
+
+    def every(enum: type, key: str, value) -> bool:
+        return all(_policy(enum, profile.get(key)) == value for profile in offered)
+
+    keep_all = any(_policy(HistoryPolicy, profile.get("history")) == HistoryPolicy.KEEP_ALL for profile in offered)
+    reliable = every(ReliabilityPolicy, "reliability", ReliabilityPolicy.RELIABLE)
+    latched = every(DurabilityPolicy, "durability", DurabilityPolicy.TRANSIENT_LOCAL)
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_ALL if keep_all else HistoryPolicy.KEEP_LAST,
+        depth=max(int(p.get("depth") or 0) for p in offered) or DEFAULT_DEPTH,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
+
+
+def select_topics(bag: Bag, wanted: list[str] | None) -> tuple[dict[str, tuple[type, QoSProfile]], list[str]]:
+    """Publishable topics of ``wanted`` (all: None) -> (message class, QoS), and the skipped
+    ones as 'topic (type)'. ``BagError`` for a topic not in the recording or none publishable."""
+    known = bag.topics()
+    wanted = list(known) if not wanted else list(dict.fromkeys(wanted))
+    unknown = [topic for topic in wanted if topic not in known]
+    if unknown:
+        raise BagError(f"unknown topics {', '.join(unknown)}: the recording has {', '.join(known)}")
+    outputs, skipped = {}, []
+    for topic in wanted:
+        datatype = known[topic][0]
+        cls = message_class(datatype)
+        if cls is None:
+            skipped.append(f"{topic} ({datatype})")
+            continue
+        try:
+            outputs[topic] = (cls, replay_qos(bag.offered_qos(topic)))
+        except (KeyError, ValueError, TypeError, AttributeError):
+            raise BagError(f"{topic}: unreadable QoS profiles in the recording's metadata") from None
+    if not outputs:
+        raise BagError(f"nothing to replay: no Python code here for the types of {', '.join(skipped)}")
+    return outputs, skipped
+
+
+class ReplayNode(Node):
+    """Publishes the recorded messages of the selected topics at their recorded times / rate
+    from a worker thread, started by the first spin; ends the process's spin at the end."""
+
+    def __init__(self, bag: Bag, outputs: dict[str, tuple[type, QoSProfile]], skipped: list[str],
+                 rate: float, loop: bool, paused: bool) -> None:
+        super().__init__(NODE_NAME)
+        self.bag, self.rate, self.loop = bag, rate, loop
+        self.outputs = {topic: self.create_publisher(cls, topic, qos) for topic, (cls, qos) in outputs.items()}
+        if skipped:
+            self.get_logger().warning(f"not replayed (message type not available here): {', '.join(skipped)}")
+        self.failed = False
+        self.published = 0
+        self._stop = threading.Event()
+        self._resumed = threading.Event()
+        if not paused:
+            self._resumed.set()
+        self.create_service(Trigger, "~/resume", self._on_resume)
+        count = sum(n for topic, (_, n) in bag.topics().items() if topic in self.outputs)
+        self.get_logger().info(f"replaying {count} messages on {len(self.outputs)} topics from {bag.path} "
+                               f"at rate {rate:g}{', looping' if loop else ''}{', paused' if paused else ''}")
+        self._worker = threading.Thread(target=self._run, name="replay", daemon=True)
+        self._starter = self.create_timer(0.0, self._start)
+
+    def _start(self) -> None:
+        """Once, when the executor spins: begin (so that the end of the recording ends the spin)."""
+        self.destroy_timer(self._starter)
+        self._worker.start()
+
+    def _on_resume(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        """``~/resume``: begin a replay started paused."""
+        response.success = not self._resumed.is_set()
+        response.message = "resumed" if response.success else "not paused"
+        self._resumed.set()
+        return response
+
+    def _run(self) -> None:
+        try:
+            self._resumed.wait()
+            while not self._stop.is_set() and self._play() and self.loop:
+                pass
+            if self._stop.is_set():
+                return
+            self.get_logger().info(f"end of the recording: {self.published} messages published")
+        except Exception as exc:  # noqa: BLE001  reported; a signal's shutdown is not a failure
+            if not self._stop.is_set() and self.context.ok():
+                self.failed = True
+                self.get_logger().error(f"replay failed: {exc}")
+        finally:
+            if not self._stop.is_set():
+                self.context.try_shutdown()  # end the spin: the process exits
+
+    def _play(self) -> bool:
+        """Publish the recording once, each message when it is due: the start (monotonic clock,
+        s; when the first message has been read) plus its log time's offset from the recording's
+        first message over the rate. False if stopped."""
+        start = None
+        for channel, message in self.bag.messages(list(self.outputs)):
+            start = time.monotonic() if start is None else start
+            due = start + (message.log_time - self.bag.start_ns) * 1e-9 / self.rate
+            if self._stop.wait(max(0.0, due - time.monotonic())):
+                return False
+            self.outputs[channel.topic].publish(message.data)
+            self.published += 1
+        return True
+
+    def close(self) -> None:
+        """Stop publishing (end of the recording, SIGINT, SIGTERM)."""
+        self._stop.set()
+        self._resumed.set()
+        if self._worker.is_alive():
+            self._worker.join(timeout=5.0)
+
+
+def _parser() -> OneLineParser:
+    parser = OneLineParser(prog=PROGRAM, description="Publish a recording's messages with their recorded timing.")
+    parser.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 directory or .mcap file")
+    parser.add_argument("--rate", type=float, default=1.0, metavar="R",
+                        help="speed factor: log-time differences are divided by it")
+    parser.add_argument("--loop", action="store_true", help="replay again and again until stopped")
+    parser.add_argument("--topics", nargs="+", metavar="TOPIC", help="replay only these topics")
+    parser.add_argument("--start-paused", action="store_true", help="wait for a call of the ~/resume service")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point ``biped-gait-replay``; returns the exit status. ROS arguments
+    (``--ros-args ...``) go to rclpy, the others to this command."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = _parser()
+    args = parser.parse_args(remove_ros_args([PROGRAM, *argv])[1:])
+    if not (math.isfinite(args.rate) and args.rate > 0):
+        parser.error(f"--rate must be a positive number, got {args.rate:g}")
+    try:
+        bag = open_bag(args.bag)
+        outputs, skipped = select_topics(bag, args.topics)
+    except BagError as exc:
+        print(f"{PROGRAM}: error: {exc}", file=sys.stderr)
+        return 2
+    nodes: list[ReplayNode] = []
+
+    def make_node() -> ReplayNode:
+        nodes.append(ReplayNode(bag, outputs, skipped, args.rate, args.loop, args.start_paused))
+        return nodes[0]
+
+    status = run_node(make_node, PROGRAM, threads=2, args=[PROGRAM, *argv])
+    return 1 if status == 0 and nodes and nodes[0].failed else status
+
+
+if __name__ == "__main__":
+    sys.exit(main())
