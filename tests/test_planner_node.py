@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 import signal
-import threading
 import time
 from pathlib import Path
 
@@ -20,7 +19,6 @@ from biped_gait.gait import GaitRequest
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
-from .conftest import DEFAULT_REQUEST
 from .ros_helpers import RosSide, start_node, stop_node
 
 SERVICE = "/biped_gait_planner/plan_gait"
@@ -179,3 +177,78 @@ def test_recording_holds_every_call_and_plan(tmp_path, stop_signal):
     decoded = [m for m in read_ros2_messages(str(mcap_path))]
     assert len(decoded) == 6
     assert [m.ros_msg.sequence for m in decoded if m.channel.topic.endswith("/calls")] == [1, 2, 3, 4]
+
+
+ACTION = "/biped_gait_planner/optimize_arm_swing"
+
+
+def send_goal(ros, client, **goal):
+    from biped_gait_interfaces.action import OptimizeArmSwing
+
+    feedback = []
+    request = OptimizeArmSwing.Goal(step_length=0.45, period=0.45, mode=PlanGait.Request.NORMAL,
+                                    alpha_min=0.0, alpha_max=math.radians(45.0), **goal)
+    sent = client.send_goal_async(request, feedback_callback=lambda m: feedback.append(m.feedback))
+    ros.wait(sent.done, 30.0)
+    handle = sent.result()
+    assert handle.accepted
+    return handle, feedback
+
+
+@pytest.fixture(scope="module")
+def action_client(ros):
+    from rclpy.action import ActionClient
+
+    from biped_gait_interfaces.action import OptimizeArmSwing
+
+    client = ActionClient(ros.node, OptimizeArmSwing, ACTION)
+    assert client.wait_for_server(timeout_sec=30.0)
+    return client
+
+
+def test_the_action_reports_progress_and_finds_the_optimum(ros, action_client, planner):
+    from action_msgs.msg import GoalStatus
+
+    from biped_gait.optimize import optimal_arm_amplitude
+
+    handle, feedback = send_goal(ros, action_client)
+    result_future = handle.get_result_async()
+    ros.wait(result_future.done, 120.0)
+    wrapped = result_future.result()
+    assert wrapped.status == GoalStatus.STATUS_SUCCEEDED
+    result = wrapped.result
+    expected = optimal_arm_amplitude(planner, 0.45, 0.45, "normal", (0.0, math.radians(45.0)))
+    assert result.success and result.interior
+    assert result.alpha_opt == pytest.approx(expected.alpha, abs=1e-9)
+    assert result.effort_opt == pytest.approx(expected.W, rel=1e-9)
+    assert len(feedback) == len(result.alphas) == expected.evaluations >= 31
+    assert all(0 < f.progress < 1 for f in feedback) and feedback[-1].progress >= feedback[0].progress
+    assert min(result.efforts) == pytest.approx(result.effort_opt, rel=1e-12)
+    assert list(result.alphas) == sorted(result.alphas)
+
+
+def test_the_action_can_be_canceled(ros, action_client):
+    from action_msgs.msg import GoalStatus
+
+    handle, feedback = send_goal(ros, action_client)
+    ros.wait(lambda: len(feedback) >= 3, 60.0)
+    cancel = handle.cancel_goal_async()
+    ros.wait(cancel.done, 30.0)
+    result_future = handle.get_result_async()
+    ros.wait(result_future.done, 60.0)
+    assert result_future.result().status == GoalStatus.STATUS_CANCELED
+    assert "canceled after" in result_future.result().result.message
+    assert len(result_future.result().result.alphas) < 31
+
+
+def test_the_service_answers_while_an_optimization_runs(ros, action_client, default_gait):
+    handle, feedback = send_goal(ros, action_client, params="aoustin2013-table")
+    result_future = handle.get_result_async()
+    ros.wait(lambda: len(feedback) >= 2, 60.0)
+    started = time.monotonic()
+    response = ros.call(ros.client, plan_request(arm_amplitude=math.radians(23.5) + 1e-6))  # not cached
+    answered_in = time.monotonic() - started
+    assert response.success and response.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-4)
+    assert not result_future.done(), "the optimization finished before the call: nothing was shown"
+    print(f"\nplan_gait answered in {answered_in * 1000:.0f} ms while the optimization ran")
+    ros.wait(result_future.done, 120.0)

@@ -28,7 +28,7 @@ def test_twenty_steps_land_on_the_plan(planner, default_gait):
     errors = [o.touchdown.state_error for o in outcomes]
     print("\nstate error at each touchdown (rad, rad/s):", " ".join(f"{e:.1e}" for e in errors))
     assert max(errors) < 1e-9  # stated tolerance: the plan is tracked to numerical precision
-    for k, o in enumerate(outcomes):
+    for o in outcomes:
         td = o.touchdown
         assert td.t_step == pytest.approx(default_gait.period, abs=1e-9)
         assert td.W == pytest.approx(default_gait.W, rel=1e-7)
