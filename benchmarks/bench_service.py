@@ -47,7 +47,7 @@ def main() -> None:
         side = RosSide("bench_client")
         try:
             client = side.node.create_client(PlanGait, "/biped_gait_planner/plan_gait")
-            assert client.wait_for_service(timeout_sec=30.0)
+            side.connect(client)
             assert side.call(client, request).success
             spin_once, until_complete = [], []
             for _ in range(CALLS):

@@ -19,6 +19,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.integrate._ivp import dop853_coefficients as _dop853
 
+try:
+    from ._flow_native import NativeFlow
+except ImportError:  # not built (no compiler): the Python loop serves
+    NativeFlow = None
+
 _STAGES = _dop853.N_STAGES
 _A = _dop853.A[:_STAGES, :_STAGES]
 _B = _dop853.B
@@ -41,9 +46,14 @@ class FlowResult:
 
 
 class BallisticFlow:
-    """Fixed-grid RK8 integrator of the unactuated single-support dynamics, with sensitivities."""
+    """Fixed-grid RK8 integrator of the unactuated single-support dynamics, with sensitivities.
 
-    def __init__(self, model: pin.Model, steps: int = 48) -> None:
+    ``native``: run the grid in the compiled twin (biped_gait/native/flow.cpp, same scheme and
+    same Pinocchio algorithms, built by tools/setup.sh) - None: when it is built; False: the
+    Python loop below. Both give the same results to rounding (tests/test_flow.py).
+    """
+
+    def __init__(self, model: pin.Model, steps: int = 48, native: bool | None = None) -> None:
         if steps < 1:
             raise ValueError(f"steps must be at least 1, got {steps}")
         self.model = model
@@ -51,6 +61,11 @@ class BallisticFlow:
         self.steps = steps
         self.nq = model.nq
         self._tau = np.zeros(model.nv)
+        if native is None:
+            native = NativeFlow is not None
+        if native and NativeFlow is None:
+            raise ValueError("the compiled flow is not built: run tools/setup.sh")
+        self.native = NativeFlow(model.saveToString(), np.ascontiguousarray(_A), _B, steps) if native else None
 
     def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """qdd (rad/s^2) of the ballistic dynamics at (q, qd), by ABA."""
@@ -69,6 +84,11 @@ class BallisticFlow:
         ``seeds`` (18 x k) are initial variations [dq0; dqd0]; their images at the end are
         returned in ``FlowResult.sens``. ``keep_nodes`` also returns the state at every node.
         """
+        if self.native is not None:
+            q, qd, sens, evaluations, nodes = self.native.propagate(q0, qd0, duration, seeds, keep_nodes)
+            if nodes is not None:
+                nodes = (np.linspace(0.0, duration, self.steps + 1), *nodes)
+            return FlowResult(q, qd, sens, evaluations, nodes)
         n = self.nq
         k = 0 if seeds is None else seeds.shape[1]
         cols = 1 + k

@@ -61,6 +61,13 @@ class RosSide:
             assert time.monotonic() < deadline, "timed out waiting"
             self.executor.spin_once(timeout_sec=0.005)
 
+    def connect(self, client, timeout: float = 30.0) -> None:
+        """Wait for a service, then let discovery finish the server's side: a response sent
+        before the server has matched this client's reader is lost (a DDS race)."""
+        assert client.wait_for_service(timeout_sec=timeout), f"service {client.srv_name} did not appear"
+        settle = time.monotonic() + 1.0
+        self.wait(lambda: time.monotonic() > settle, 5.0)
+
     def call(self, client, request, timeout: float = 30.0):
         """Call a service and return its response (spinning this side's executor)."""
         future = client.call_async(request)

@@ -35,7 +35,7 @@ def recordings(tmp_path_factory) -> tuple[Path, Path]:
         side = RosSide("analyze_test_client")
         try:
             client = side.node.create_client(PlanGait, f"/{PLANNER}/plan_gait")
-            assert client.wait_for_service(timeout_sec=30.0)
+            side.connect(client)
             refused = side.call(client, PlanGait.Request(step_length=math.nan, period=0.45, arm_amplitude=0.41))
             assert not refused.success
         finally:

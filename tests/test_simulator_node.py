@@ -105,7 +105,8 @@ def test_an_independent_subscriber_sees_the_topics(planner_node, tmp_path):
         side.node.create_subscription(Odometry, "/odom", lambda m: got["odom"].append(m), 1000)
         side.node.create_subscription(AngularMomentum, "/angular_momentum", lambda m: got["momentum"].append(m), 1000)
         side.node.create_subscription(GaitEvent, "/gait_events", lambda m: got["events"].append(m), 100)
-        proc = simulator(tmp_path, "steps:=2", "real_time_factor:=1.0", "exit_when_done:=true", "record:=false")
+        proc = simulator(tmp_path, "steps:=2", "real_time_factor:=1.0", "exit_when_done:=true", "record:=false",
+                         "wait_for_subscribers:=1")
         side.wait(lambda: any(e.kind == GaitEvent.FINISHED for e in got["events"]) or proc.poll() is not None, 120.0)
         deadline = time.monotonic() + 1.0
         side.wait(lambda: time.monotonic() > deadline, 5.0)  # let the last samples arrive
@@ -130,7 +131,11 @@ def test_an_independent_subscriber_sees_the_topics(planner_node, tmp_path):
 
 def test_sigterm_leaves_a_complete_recording(planner_node, tmp_path):
     proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0")
-    time.sleep(4.0)
+    log = tmp_path / "biped-gait-simulator.log"
+    deadline = time.monotonic() + 60.0
+    while "walking L =" not in log.read_text() and time.monotonic() < deadline:  # plan obtained, walk started
+        time.sleep(0.05)
+    time.sleep(1.0)  # half a second of recorded walk or more
     assert stop_node(proc, signal.SIGTERM) == 0
     [bag] = list((tmp_path / "bags").iterdir())
     [mcap_path] = list(bag.glob("*.mcap"))
@@ -145,7 +150,7 @@ def test_sigkill_loses_at_most_the_last_chunk(planner_node, tmp_path):
         side.node.create_subscription(
             JointState, "/joint_states",
             lambda m: stamps.append(m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec), 1000)
-        proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "chunk_size:=16384")
+        proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "chunk_size:=16384", "wait_for_subscribers:=1")
         side.wait(lambda: len(stamps) > 600, 120.0)
         proc.kill()
         proc.wait()

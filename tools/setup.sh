@@ -15,6 +15,14 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "^WARNING: Location" || true; }
   echo "$want" > "$stamp"
 fi
+# The compiled twin of the ballistic flow (C++ over the wheels' Pinocchio), rebuilt when its
+# source changes.
+nstamp=.venv/.native.sha
+nwant=$(cat biped_gait/native/flow.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/_flow_native*.so > /dev/null 2>&1; then
+  bash tools/build_native.sh
+  echo "$nwant" > "$nstamp"
+fi
 # The ROS interfaces, rebuilt when their definitions change.
 istamp=.venv/.interfaces.sha
 iwant=$(find msg_defs tools/build_interfaces.sh -type f -print0 | sort -z | xargs -0 cat | sha256sum | cut -d' ' -f1)

@@ -118,6 +118,9 @@ class SimulatorNode(Node):
             "MCAP chunk size (bytes): at most this much is lost if the process is killed",
             integer_range=[IntegerRange(from_value=1024, to_value=64 * 1024 * 1024, step=1)]))
         self.declare_parameter("exit_when_done", False, desc("end the process when the walk ends"))
+        self.declare_parameter("wait_for_subscribers", 0, desc(
+            "start walking once /joint_states has this many subscribers (discovery can take seconds)",
+            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
 
     # Plan acquisition ---------------------------------------------------------------------
     def _on_plan(self, msg: GaitPlan) -> None:
@@ -151,10 +154,25 @@ class SimulatorNode(Node):
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
         request = PlanGait.Request(step_length=value("step_length"), period=value("period"), arm_amplitude=alpha,
                                    mode=mode, params=value("params"))
-        response = self._wait(self.plan_client.call_async(request), "plan_gait")
+        response = self._call_plan(request)
         if not response.success:
             raise RuntimeError(f"the planner refused: {response.message}")
         return response.plan
+
+    def _call_plan(self, request: PlanGait.Request, attempts: int = 5, patience: float = 10.0) -> PlanGait.Response:
+        """Call plan_gait, sending again when no answer comes: right after discovery a DDS
+        response can be lost (the server has not yet matched our reader). The call is
+        idempotent (and answered from the planner's cache)."""
+        for attempt in range(1, attempts + 1):
+            future = self.plan_client.call_async(request)
+            deadline = time.monotonic() + patience
+            while not future.done() and time.monotonic() < deadline and not self._stop.is_set():
+                time.sleep(0.002)
+            if future.done():
+                return future.result()
+            self.plan_client.remove_pending_request(future)
+            self.get_logger().warn(f"no answer from plan_gait in {patience:g} s (attempt {attempt}/{attempts})")
+        raise RuntimeError(f"no answer from plan_gait after {attempts} attempts")
 
     def _obtain_plan(self) -> GaitPlan:
         if self.source == "service":
@@ -188,6 +206,11 @@ class SimulatorNode(Node):
         self.context.try_shutdown()
 
     def _walk(self, plan_msg: GaitPlan) -> None:
+        wanted = self.get_parameter("wait_for_subscribers").value
+        while self.pub_joints.get_subscription_count() < wanted:
+            if self._stopping():
+                return
+            time.sleep(0.01)
         result = result_from_plan(plan_msg)
         bm = BipedModel.from_params(load_params(plan_msg.params or None))
         walker = Walker(bm, result, self.rate, reaim=self.get_parameter("reaim").value)
