@@ -8,7 +8,7 @@ prefix=$("$PY" -c 'import sysconfig, os; print(os.path.join(sysconfig.get_paths(
 out=biped_gait/_flow_native$("$PY" -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
 py_include=$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')
 pybind_include=$("$PY" -c 'import pybind11; print(pybind11.get_include())')
-g++ -O2 -std=c++17 -shared -fPIC -DNDEBUG \
+g++ -O2 -std=c++17 -shared -fPIC -DNDEBUG -Wno-deprecated-declarations \
   -DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION -DBOOST_MPL_LIMIT_LIST_SIZE=30 -DBOOST_MPL_LIMIT_VECTOR_SIZE=30 \
   -DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS -DBOOST_FUSION_INVOKE_MAX_ARITY=12 \
   -I"$py_include" -I"$pybind_include" -I"$prefix/include" -I"$prefix/include/eigen3" \
