@@ -68,3 +68,14 @@ def boundary_configurations(
 def exchange_legs(q: np.ndarray) -> np.ndarray:
     """Apply P: a configuration (or joint velocity) of this step in the next step's coordinates."""
     return P_MATRIX @ q
+
+
+MIRROR = np.diag([1.0, -1.0, 1.0])  # y -> -y: the next step is the mirror image of this one
+
+
+def mirror_for(stance_side: str) -> np.ndarray:
+    """The map from a step's model frame (stance leg 1) to world axes: identity with the right
+    foot in stance, the mirror y -> -y with the left."""
+    if stance_side not in ("right", "left"):
+        raise ValueError(f"stance side must be 'right' or 'left', got {stance_side!r}")
+    return np.eye(3) if stance_side == "right" else MIRROR

@@ -16,6 +16,7 @@ import numpy as np
 
 from .boundary import P_INVERSE, THETA_DIRECTION, GaitMode, boundary_configurations
 from .flow import BallisticFlow
+from .impulses import ImpactProblem
 from .model import BipedModel
 
 CLOSURES = ("theta", "slack")
@@ -58,6 +59,14 @@ def next_step_velocity(bm: BipedModel, q_t: np.ndarray, qd_a: np.ndarray) -> np.
     qd = P_INVERSE @ qd_a
     _, j2 = bm.tip_jacobians(q_t)
     return np.concatenate([-j2[:, 3:] @ qd, qd])
+
+
+def impact_problem(bm: BipedModel, q_t: np.ndarray, qd_b: np.ndarray, qd_a: np.ndarray) -> ImpactProblem:
+    """Eqs. (6)-(10) at double-support configuration ``q_t``: this step ends with joint
+    velocity ``qd_b``, the next starts with ``qd_a`` (in its own coordinates, spec section 5)."""
+    j1, j2 = bm.tip_jacobians(q_t)
+    xd_b = np.concatenate([np.zeros(3), qd_b])
+    return ImpactProblem(bm.mass_matrix(q_t), j1, j2, xd_b, next_step_velocity(bm, q_t, qd_a), locked_rotation(bm, q_t))
 
 
 def closure_gap(bm: BipedModel, q_t: np.ndarray, qd_a: np.ndarray, qd_b: np.ndarray) -> float:

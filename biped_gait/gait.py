@@ -15,9 +15,9 @@ import numpy as np
 import pinocchio as pin
 
 from .boundary import GaitMode
-from .bvp import CLOSURES, BvpSolution, locked_rotation, next_step_velocity, solve_bvp
+from .bvp import CLOSURES, BvpSolution, impact_problem, solve_bvp
 from .flow import BallisticFlow, hermite_samples
-from .impulses import EFFORTS, ImpactProblem, solve_impulses
+from .impulses import EFFORTS, solve_impulses
 from .model import BipedModel
 from .params import BipedParams, load_params
 from .reports import StepTrajectory, step_figures
@@ -124,19 +124,14 @@ class GaitPlanner:
     def _double_support(self, result: GaitResult, bvp: BvpSolution, request: GaitRequest) -> None:
         bm = self.model
         q_t = bvp.q_target
-        j1, j2 = bm.tip_jacobians(q_t)
-        d_e = bm.mass_matrix(q_t)
-        z = locked_rotation(bm, q_t)
-        xd_b = np.concatenate([np.zeros(3), bvp.qd_b])
-        xd_a = next_step_velocity(bm, q_t, bvp.qd_a)
+        problem = impact_problem(bm, q_t, bvp.qd_b, bvp.qd_a)
         slack = 0.0
         if request.closure == "slack":
             # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
-            # eqs. (6)-(10) consistent (z_d^T D_e (Xd^a + s z_d - Xd^b) = 0).
-            slack = -float(z @ d_e @ (xd_a - xd_b)) / float(z @ d_e @ z)
-            xd_a = xd_a + slack * z
-        problem = ImpactProblem(d_e, j1, j2, xd_b, xd_a, z)
+            # eqs. (6)-(10) consistent.
+            problem, slack = problem.reachable()
         sol = solve_impulses(problem, request.effort)
+        xd_b, xd_a, j1, j2 = problem.xd_b, problem.xd_a, problem.j1, problem.j2
         new_foot = bm.swing_tip(q_t)
         result.fill_impulses(sol, xd_b, xd_a, slack)
         result.H_Tminus = [bm.vertical_momentum_about(q_t, xd_b, np.zeros(3)), bm.vertical_momentum_about(q_t, xd_b, new_foot)]

@@ -20,7 +20,7 @@ Impulses in N m s (joints) and N s (reactions); velocities in m/s and rad/s.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import osqp
@@ -76,6 +76,13 @@ class ImpactProblem:
     def closure_residual(self) -> float:
         """z_d^T D_e (Xd^a - Xd^b) (kg m^2/s): how far the equations are from consistent."""
         return float(self.locked_rotation @ self.mass_matrix @ (self.xd_a - self.xd_b))
+
+    def reachable(self) -> tuple["ImpactProblem", float]:
+        """The nearest consistent problem: Xd^a + s z_d with z_d^T D_e (Xd^a + s z_d - Xd^b) = 0,
+        and s (rad/s), the correction along the locked rotation (spec section 4)."""
+        z = self.locked_rotation
+        s = -self.closure_residual() / float(z @ self.mass_matrix @ z)
+        return replace(self, xd_a=self.xd_a + s * z), s
 
 
 @dataclass

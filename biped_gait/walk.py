@@ -21,21 +21,20 @@ velocity as the miss, and how far the re-aimed velocity is from the plan's. Ever
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from pinocchio import forwardKinematics
 from scipy.optimize import brentq
 
-from .boundary import P_INVERSE, P_MATRIX
-from .bvp import locked_rotation, next_step_velocity
+from .boundary import P_INVERSE, P_MATRIX, mirror_for
+from .bvp import impact_problem, next_step_velocity
 from .flow import BallisticFlow, hermite_samples
-from .impulses import ImpactProblem, solve_impulses
+from .impulses import solve_impulses
 from .model import BipedModel
 from .reports import ground_reaction_inverse_dynamics
 from .result import GaitResult
 
-MIRROR = np.diag([1.0, -1.0, 1.0])
 
 
 class Fall(Exception):
@@ -205,32 +204,29 @@ class Walker:
     def _double_support(self, q_td: np.ndarray, qd_td: np.ndarray, t_step: float) -> Touchdown:
         """Impulses from the actual pre-impact state towards the plan, then the leg exchange."""
         bm, s = self.bm, self.state
-        j1, j2 = bm.tip_jacobians(q_td)
-        d_e = bm.mass_matrix(q_td)
-        z = locked_rotation(bm, q_td)
-        xd_b = np.concatenate([np.zeros(3), qd_td])
-        planned = next_step_velocity(bm, q_td, self.qd_a)
-        miss = -float(z @ d_e @ (planned - xd_b)) / float(z @ d_e @ z)
+        planned = impact_problem(bm, q_td, qd_td, self.qd_a)
+        reachable, miss = planned.reachable()
         if self.reaim:
-            qd_next = self._reaim(P_MATRIX @ q_td, z @ d_e, xd_b, q_td)
-            xd_a = next_step_velocity(bm, q_td, qd_next)
+            momentum_row = planned.locked_rotation @ planned.mass_matrix
+            qd_next = self._reaim(P_MATRIX @ q_td, momentum_row, planned.xd_b, q_td)
+            problem = replace(planned, xd_a=next_step_velocity(bm, q_td, qd_next))
         else:
-            xd_a = planned + miss * z
+            problem = reachable
+        xd_a = problem.xd_a
         if not np.all(np.isfinite(xd_a)):
             raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
-        sol = solve_impulses(ImpactProblem(d_e, j1, j2, xd_b, xd_a, z), self.effort)
+        sol = solve_impulses(problem, self.effort)
         if not sol.success:
             raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
         error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
         touchdown = Touchdown(
             step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
             W=sol.W, state_error=error, velocity_miss=abs(miss),
-            correction=float(np.max(np.abs(xd_a[3:] - planned[3:]))), equation_residual=sol.equation_residual,
+            correction=float(np.max(np.abs(xd_a[3:] - planned.xd_a[3:]))), equation_residual=sol.equation_residual,
         )
         # The new stance foot's world position, then the mirror: the next step in model coordinates.
         tip = bm.swing_tip(q_td)
-        mirror = np.eye(3) if s.stance_side == "right" else MIRROR
-        new_foot = s.stance_foot + mirror @ tip
+        new_foot = s.stance_foot + mirror_for(s.stance_side) @ tip
         new_foot[2] = 0.0
         self.state = WalkState(
             q=P_MATRIX @ q_td,
@@ -273,18 +269,3 @@ class Walker:
             raise Fall("re-aiming the next step did not converge: the state is too far from the plan")
         self.next_period = duration
         return v
-
-
-def to_world(state_side: str, stance_foot: np.ndarray, point: np.ndarray) -> np.ndarray:
-    """World position (m) of a point given in the model frame of a step (stance tip at origin)."""
-    mirror = np.eye(3) if state_side == "right" else MIRROR
-    return stance_foot + mirror @ point
-
-
-def pseudo_to_world(state_side: str, vector: np.ndarray) -> np.ndarray:
-    """World components of an axial vector (angular momentum) given in a step's model frame.
-
-    Under the mirror y -> -y an axial vector v maps to det(M) M v = (-vx, vy, -vz).
-    """
-    return vector.copy() if state_side == "right" else -MIRROR @ vector
-

@@ -15,17 +15,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from .boundary import mirror_for
 from .model import BipedModel, cross
 from .urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
 
-MIRROR = np.diag([1.0, -1.0, 1.0])
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
-
-
-def mirror_for(stance_side: str) -> np.ndarray:
-    """The map from a step's model frame to world axes: identity (right stance) or the mirror."""
-    return np.eye(3) if stance_side == "right" else MIRROR
 
 
 @dataclass

@@ -55,6 +55,10 @@ NODE_NAME = "biped_gait_simulator"
 TF_TYPE = "tf2_msgs/msg/TFMessage"
 
 
+class NoAnswer(RuntimeError):
+    """A service or action of the planner did not answer in time."""
+
+
 class SimulatorNode(Node):
     """Walks plans and publishes joint states, pose, angular momentum and gait events."""
 
@@ -128,10 +132,11 @@ class SimulatorNode(Node):
         self._plan_ready.set()
 
     def _wait(self, future, what: str, timeout: float = 120.0):
+        """The future's result; ``NoAnswer`` after ``timeout`` s or when the node stops."""
         deadline = time.monotonic() + timeout
         while not future.done():
             if self._stop.is_set() or time.monotonic() > deadline:
-                raise RuntimeError(f"no answer from {what}")
+                raise NoAnswer(f"no answer from {what}")
             time.sleep(0.002)
         return future.result()
 
@@ -165,12 +170,12 @@ class SimulatorNode(Node):
         idempotent (and answered from the planner's cache)."""
         for attempt in range(1, attempts + 1):
             future = self.plan_client.call_async(request)
-            deadline = time.monotonic() + patience
-            while not future.done() and time.monotonic() < deadline and not self._stop.is_set():
-                time.sleep(0.002)
-            if future.done():
-                return future.result()
-            self.plan_client.remove_pending_request(future)
+            try:
+                return self._wait(future, "plan_gait", patience)
+            except NoAnswer:
+                self.plan_client.remove_pending_request(future)
+                if self._stop.is_set():
+                    raise
             self.get_logger().warn(f"no answer from plan_gait in {patience:g} s (attempt {attempt}/{attempts})")
         raise RuntimeError(f"no answer from plan_gait after {attempts} attempts")
 
