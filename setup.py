@@ -11,7 +11,7 @@ setup(
     license="Apache-2.0",
     python_requires=">=3.11",
     packages=find_packages(include=[PACKAGE, f"{PACKAGE}.*"]),
-    package_data={f"{PACKAGE}.data": ["*.yaml"]},
+    package_data={f"{PACKAGE}.core.data": ["*.yaml"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
@@ -23,7 +23,7 @@ setup(
             "biped-gait-planner = biped_gait.ros.planner_node:main",
             "biped-gait-simulator = biped_gait.ros.simulator_node:main",
             "biped-gait-replay = biped_gait.ros.replay:main",
-            "biped-gait-analyze = biped_gait.analyze:main",
+            "biped-gait-analyze = biped_gait.analysis.cli:main",
             "biped-gait-launch = biped_gait.ros.launch:main",
         ],
     },

@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from biped_gait.gait import GaitPlanner, GaitRequest
+from biped_gait.core.planner import GaitPlanner, GaitRequest
 
 
 def main() -> None:
@@ -33,7 +33,7 @@ def main() -> None:
         start = time.perf_counter()
         result = planner.plan(req)
         cold.append(time.perf_counter() - start)
-        cold_evals.append(result.dynamics_evaluations)
+        cold_evals.append(result.step.evaluations)
         assert result.converged and result.admissible, result.reasons
 
     warm, warm_evals, iters = [], [], []
@@ -43,8 +43,8 @@ def main() -> None:
         start = time.perf_counter()
         result = planner.plan(req, guess=guess)
         warm.append(time.perf_counter() - start)
-        warm_evals.append(result.dynamics_evaluations)
-        iters.append(result.bvp_iterations)
+        warm_evals.append(result.step.evaluations)
+        iters.append(result.step.iterations)
         assert result.converged and result.admissible, result.reasons
         previous = result
 

@@ -1,8 +1,7 @@
 """Benchmark: the planner service's round trip from a client in another process.
 
 Starts ``biped-gait-planner`` (recording off), warms its cache with one request, then times
-200 calls of that cached request with a client that waits by ``spin_once`` (the fast style, see
-../shared/notes), 200 with ``spin_until_future_complete``, and 200 refused requests (a small
+200 calls of that cached request with a client that waits by ``spin_once`` (the fast style), 200 with ``spin_until_future_complete``, and 200 refused requests (a small
 reply: the middleware's share without the plan's 91-point trajectory); prints the medians next
 to the direct core call (``GaitPlanner.plan``, uncached). Run:
 
@@ -23,13 +22,11 @@ os.environ.setdefault("ROS_DOMAIN_ID", "91")
 
 import rclpy  # noqa: E402
 
-from biped_gait.gait import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 
-import sys  # noqa: E402
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from tests.ros_helpers import RosSide, start_node, stop_node  # noqa: E402
+from biped_gait.ros.client import ClientSide  # noqa: E402
+from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 
 CALLS = 200
 
@@ -43,8 +40,8 @@ def main() -> None:
         planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
         core.append(time.perf_counter() - start)
     with tempfile.TemporaryDirectory() as tmp:
-        proc = start_node("biped-gait-planner", "-p", "record:=false", cwd=Path(tmp))
-        side = RosSide("bench_client")
+        proc = start_entry("biped-gait-planner", ["-p", "record:=false"], log=Path(tmp) / "planner.log", cwd=Path(tmp))
+        side = ClientSide("bench_client")
         try:
             client = side.node.create_client(PlanGait, "/biped_gait_planner/plan_gait")
             side.connect(client)
@@ -68,7 +65,7 @@ def main() -> None:
                 until_complete.append(time.perf_counter() - start)
         finally:
             side.close()
-            stop_node(proc)
+            stop_process(proc)
     ms = lambda xs: 1e3 * statistics.median(xs)  # noqa: E731
     print(f"planner service, cached request, {CALLS} calls from another process (Fast DDS, localhost):")
     print(f"  round trip, spin_once loop:               median {ms(spin_once):6.3f} ms")

@@ -10,19 +10,17 @@ from __future__ import annotations
 import math
 import os
 import re
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", "92")
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from biped_gait.gait import GaitPlanner, GaitRequest  # noqa: E402
-from biped_gait.walk import Walker  # noqa: E402
-from biped_gait.world import WorldView  # noqa: E402
-from tests.ros_helpers import start_node, stop_node  # noqa: E402
+from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.core.walk import PlannedOrbit, Walker  # noqa: E402
+from biped_gait.core.world import WorldView  # noqa: E402
+from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 
 STEPS, RATE = 10, 1000.0
 
@@ -30,7 +28,7 @@ STEPS, RATE = 10, 1000.0
 def core_only() -> tuple[float, float]:
     planner = GaitPlanner()
     plan = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
-    walker, view = Walker(planner.model, plan, RATE), WorldView(planner.model)
+    walker, view = Walker(planner.hybrid, PlannedOrbit.of(plan), RATE), WorldView(planner.model)
     start = time.perf_counter()
     world_time = 0.0
     for _ in range(STEPS):
@@ -47,12 +45,13 @@ def main() -> None:
     walk_rtf, with_world_rtf = core_only()
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
-        planner = start_node("biped-gait-planner", "-p", "record:=false", cwd=where)
-        sim = start_node("biped-gait-simulator", "-p", f"steps:={STEPS}", "-p", "real_time_factor:=0.0",
-                         "-p", f"publish_rate:={RATE}", "-p", "exit_when_done:=true", "-p", f"record_dir:={where}/bags",
-                         cwd=where)
+        planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / "biped-gait-planner.log",
+                              cwd=where)
+        sim = start_entry("biped-gait-simulator", ["-p", f"steps:={STEPS}", "-p", "real_time_factor:=0.0",
+                          "-p", f"publish_rate:={RATE}", "-p", "exit_when_done:=true", "-p", f"record_dir:={where}/bags"],
+                          log=where / "biped-gait-simulator.log", cwd=where)
         sim.wait(timeout=600)
-        stop_node(planner)
+        stop_process(planner)
         log = (where / "biped-gait-simulator.log").read_text()
     match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
     assert match, log

@@ -13,10 +13,10 @@ import argparse
 import statistics
 import time
 
-from biped_gait.executors import check_workers, open_executor
-from biped_gait.params import load_params
-from biped_gait.study import fig4_grid
-from biped_gait.sweep import solve_grid
+from biped_gait.studies.executors import check_workers, open_executor
+from biped_gait.core.params import load_params
+from biped_gait.studies.study import fig4_grid
+from biped_gait.studies.sweep import solve_grid
 
 
 def main() -> None:

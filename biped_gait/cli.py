@@ -18,17 +18,18 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from .executors import open_executor
-from .figures import save, sweep_figures
 from .arguments import OneLineParser
-from .gait import GaitPlanner, GaitRequest
-from .optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
-from .params import DEFAULT_PARAMS, load_params, shipped_param_names
-from .results_page import write_results_page
-from .study import FIG4_CASES, FIG5_CASE, run_study
-from .sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
-from .sweep_output import SweepFiles
-from .urdf import make_urdf
+from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from .core.planner import GaitPlanner, GaitRequest
+from .core.urdf import make_urdf
+from .recording.recover import is_complete, recover
+from .studies.executors import open_executor
+from .studies.figures import save, sweep_figures
+from .studies.optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
+from .studies.results_page import write_results_page
+from .studies.study import FIG4_CASES, FIG5_CASE, run_study
+from .studies.sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
+from .studies.sweep_output import SweepFiles
 
 INTERRUPTED = 130  # exit status after Ctrl-C, as shells report it
 
@@ -211,8 +212,6 @@ def _results_page(args: argparse.Namespace) -> int:
 
 
 def _recover(args: argparse.Namespace) -> int:
-    from .ros.recorder import is_complete, recover  # MCAP only: no rclpy import
-
     files = sorted(args.bag.glob("*.mcap")) if args.bag.is_dir() else [args.bag]
     if not files or not files[0].is_file():
         raise ValueError(f"no MCAP file at {args.bag}")

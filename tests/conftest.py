@@ -14,9 +14,8 @@ os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 100)
 import numpy as np
 import pytest
 
-from biped_gait.bvp import locked_rotation
-from biped_gait.gait import GaitPlanner, GaitRequest
-from biped_gait.impulses import ImpactProblem
+from biped_gait.core.planner import GaitPlanner, GaitRequest
+from biped_gait.core.impulses import ImpactProblem
 
 DEFAULT_REQUEST = GaitRequest(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5), mode="normal")
 
@@ -31,11 +30,13 @@ def default_gait(planner):
     return planner.plan(DEFAULT_REQUEST)
 
 
-def impact_problem(planner: GaitPlanner, result) -> ImpactProblem:
-    """Rebuild eqs. (6)-(10) for a solved gait from its reported velocities."""
+def impact_problem(planner: GaitPlanner, gait) -> ImpactProblem:
+    """Rebuild eqs. (6)-(10) for a solved gait from its reported velocities, with Pinocchio
+    directly (not through the hybrid step's impact map, so that the two paths are compared)."""
     bm = planner.model
-    q_t = np.array(result.qT)
+    q_t = gait.step.q_target
     j1, j2 = bm.tip_jacobians(q_t)
-    return ImpactProblem(
-        bm.mass_matrix(q_t), j1, j2, np.array(result.Xd_b), np.array(result.Xd_a), locked_rotation(bm, q_t)
-    )
+    tip = bm.swing_tip(q_t)
+    z_d = np.zeros(12)
+    z_d[3:5] = tip[:2] / np.linalg.norm(tip)  # the locked rotation about the foot-to-foot line
+    return ImpactProblem(bm.mass_matrix(q_t), j1, j2, gait.double_support.xd_b, gait.double_support.xd_a, z_d)

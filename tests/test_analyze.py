@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from biped_gait.analyze import main
+from biped_gait.analysis.cli import main
+from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.srv import PlanGait
 
-from .ros_helpers import RosSide
 from .ros_helpers import read_bag  # rosbags: reads the files independently
 from .walk_recording import own_planner, record_walk
 
@@ -32,7 +32,7 @@ def recordings(tmp_path_factory) -> tuple[Path, Path]:
     """(walk recording, planner recording); the planner refused one request before the walk's."""
     where = tmp_path_factory.mktemp("analyze_walk")
     with own_planner(where, PLANNER, record=True):
-        side = RosSide("analyze_test_client")
+        side = ClientSide("analyze_test_client")
         try:
             client = side.node.create_client(PlanGait, f"/{PLANNER}/plan_gait")
             side.connect(client)

@@ -17,10 +17,11 @@ import math
 
 import pytest
 
-from biped_gait.gait import GaitRequest
-from biped_gait.optimize import ALPHA_RANGE, ALPHA_TOLERANCE, compare_modes
-from biped_gait.params import load_params
-from biped_gait.results_page import momentum_jump
+from biped_gait.core.planner import GaitRequest
+from biped_gait.core.settings import DEFAULTS
+from biped_gait.studies.optimize import ALPHA_RANGE, compare_modes
+from biped_gait.core.params import load_params
+from biped_gait.studies.results_page import momentum_jump
 
 STEP_LENGTHS = (0.40, 0.45, 0.50)  # m
 PERIOD = 0.45  # s
@@ -35,7 +36,7 @@ def comparisons():
 
 def jump(gait) -> float:
     """The module docstring's definition (kg m^2/s)."""
-    return abs(gait.H_Tplus[1] - gait.H_Tminus[1])
+    return abs(gait.double_support.h_t_plus[1] - gait.double_support.h_t_minus[1])
 
 
 @pytest.mark.parametrize("index", range(len(STEP_LENGTHS)))
@@ -49,7 +50,7 @@ def test_w_has_an_interior_minimum(planner, comparisons, index):
 
 def test_optimal_alpha_grows_with_step_length(comparisons):
     alphas = [c.normal.alpha for c in comparisons]
-    assert all(b - a > 10 * ALPHA_TOLERANCE for a, b in zip(alphas, alphas[1:])), [math.degrees(a) for a in alphas]
+    assert all(b - a > 10 * DEFAULTS.arm_tolerance for a, b in zip(alphas, alphas[1:])), [math.degrees(a) for a in alphas]
 
 
 def test_effort_grows_with_step_length(comparisons):

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.figures import effort_figure, momentum_figure, save, sweep_figures, two_step_momentum
-from biped_gait.sweep import solve_chain
+from biped_gait.studies.figures import effort_figure, momentum_figure, save, sweep_figures, two_step_momentum
+from biped_gait.studies.sweep import solve_chain
 
 from .conftest import DEFAULT_REQUEST
 
@@ -23,13 +23,13 @@ def anti_gait(planner):
 
 def test_two_step_momentum_is_h_then_its_mirror(default_gait):
     t, h = two_step_momentum(default_gait)
-    n = len(default_gait.trajectory["t"])
+    n = len(default_gait.figures.samples.t)
     period = default_gait.period
     assert len(t) == 2 * n and t[0] == 0.0 and t[-1] == pytest.approx(2 * period, abs=1e-15)
     assert t[n - 1] == t[n] == pytest.approx(period, abs=1e-15)  # the double support, drawn as a jump
     # Step 1 ends at H(T-) about the old stance foot, step 2 starts at H(T+) about the new one.
-    assert h[n - 1] == pytest.approx(default_gait.H_Tminus[0], abs=1e-9)
-    assert h[n] == pytest.approx(default_gait.H_Tplus[1], abs=1e-9)
+    assert h[n - 1] == pytest.approx(default_gait.double_support.h_t_minus[0], abs=1e-9)
+    assert h[n] == pytest.approx(default_gait.double_support.h_t_plus[1], abs=1e-9)
     assert np.allclose(h[n:], -h[:n], atol=0)
 
 

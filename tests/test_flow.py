@@ -8,14 +8,15 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import solve_ivp
 
-from biped_gait.flow import BallisticFlow, hermite_samples
+from biped_gait.core import reports
+from biped_gait.core.flow import BallisticFlow, hermite_samples
 
 
 def test_energy_is_conserved_along_the_step(planner, default_gait):
-    run = planner.flow.propagate(np.array(default_gait.q0), np.array(default_gait.qd_a), default_gait.period, keep_nodes=True)
-    energy = planner.energy(run.nodes[1], run.nodes[2])
+    run = planner.flow.propagate(np.array(default_gait.step.q0), np.array(default_gait.qd_a), default_gait.period, keep_nodes=True)
+    energy = reports.energy(planner.model, run.nodes[1], run.nodes[2])
     assert np.max(np.abs(energy / energy[0] - 1)) < 1e-9
-    assert default_gait.energy_drift < 1e-9
+    assert default_gait.figures.energy_drift < 1e-9
 
 
 def test_energy_is_conserved_from_a_violent_start(planner):
@@ -23,7 +24,7 @@ def test_energy_is_conserved_from_a_violent_start(planner):
     q0 = np.array([0.02, -0.3, 0.1, 0.4, 0.05, 0.5, -0.4, 0.2, 0.3])
     qd0 = np.array([0.3, 2.5, -1.0, -2.0, 0.5, -1.5, 2.0, -4.0, 6.0])
     run = planner.flow.propagate(q0, qd0, 0.45, keep_nodes=True)
-    energy = planner.energy(run.nodes[1], run.nodes[2])
+    energy = reports.energy(planner.model, run.nodes[1], run.nodes[2])
     assert np.max(np.abs(energy / energy[0] - 1)) < 1e-9
 
 
@@ -35,7 +36,7 @@ def test_fixed_grid_agrees_with_adaptive_dop853(planner, default_gait):
     def rhs(_t, y):
         return np.concatenate([y[9:], pin.aba(model, data, y[:9], y[9:], tau)])
 
-    q0, qd0 = np.array(default_gait.q0), np.array(default_gait.qd_a)
+    q0, qd0 = np.array(default_gait.step.q0), np.array(default_gait.qd_a)
     ref = solve_ivp(rhs, (0, default_gait.period), np.concatenate([q0, qd0]), method="DOP853", rtol=1e-13, atol=1e-13)
     run = planner.flow.propagate(q0, qd0, default_gait.period)
     assert np.max(np.abs(np.concatenate([run.q, run.qd]) - ref.y[:, -1])) < 1e-10
@@ -56,7 +57,7 @@ def test_sensitivities_match_central_differences(planner):
 
 
 def test_hermite_samples_reproduce_the_nodes_and_the_flow(planner, default_gait):
-    q0, qd0 = np.array(default_gait.q0), np.array(default_gait.qd_a)
+    q0, qd0 = np.array(default_gait.step.q0), np.array(default_gait.qd_a)
     run = planner.flow.propagate(q0, qd0, default_gait.period, keep_nodes=True)
     t = run.nodes[0]
     q, qd = hermite_samples(run.nodes, t)
@@ -79,7 +80,7 @@ def test_compiled_and_python_flows_agree(planner, default_gait):
     python = BallisticFlow(planner.model.single, steps=32, native=False)
     rng = np.random.default_rng(2)
     seeds = rng.normal(size=(18, 10))
-    q0, qd0 = np.array(default_gait.q0), np.array(default_gait.qd_a)
+    q0, qd0 = np.array(default_gait.step.q0), np.array(default_gait.qd_a)
     a = compiled.propagate(q0, qd0, 0.45, seeds, keep_nodes=True)
     b = python.propagate(q0, qd0, 0.45, seeds, keep_nodes=True)
     assert np.allclose(a.q, b.q, atol=1e-12) and np.allclose(a.qd, b.qd, atol=1e-11)

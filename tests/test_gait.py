@@ -11,11 +11,13 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from biped_gait.boundary import P_INVERSE, P_MATRIX, GaitMode
-from biped_gait.bvp import solve_bvp
-from biped_gait.gait import GaitPlanner, GaitRequest
-from biped_gait.impulses import I_MINUS, I_PLUS, solve_impulses
-from biped_gait.reports import ground_reaction_inverse_dynamics, ground_reaction_momentum
+from biped_gait.core.configurations import GaitMode
+from biped_gait.core.hybrid import P_INVERSE, P_MATRIX
+from biped_gait.core.bvp import solve_bvp
+from biped_gait.core.settings import DEFAULTS
+from biped_gait.core.planner import GaitPlanner, GaitRequest
+from biped_gait.core.impulses import I_MINUS, I_PLUS, solve_impulses
+from biped_gait.core.reports import ground_reaction_inverse_dynamics, ground_reaction_momentum
 
 from .conftest import DEFAULT_REQUEST, impact_problem
 
@@ -23,15 +25,15 @@ from .conftest import DEFAULT_REQUEST, impact_problem
 def test_default_gait_is_converged_admissible_and_human_like(default_gait):
     g = default_gait
     assert g.converged and g.admissible, g.reasons
-    assert g.min_grf_z > 0 and g.min_swing_height > 0
-    assert g.q9_min >= -1e-9  # swing knee flexes forward: the human-like branch
+    assert g.figures.min_grf_z > 0 and g.figures.min_swing_height > 0
+    assert g.figures.q9_min >= -1e-9  # swing knee flexes forward: the human-like branch
     assert abs(math.degrees(g.theta)) < 1.0  # "a fraction of a degree"
-    assert max(abs(v) for v in g.q3_range) < math.radians(1.0)  # stance leg nearly straight
+    assert max(abs(v) for v in g.figures.q3_range) < math.radians(1.0)  # stance leg nearly straight
 
 
 def test_bvp_and_closure_residuals(default_gait):
-    assert default_gait.end_point_residual < 1e-10
-    assert abs(default_gait.closure_residual) < 1e-9
+    assert default_gait.step.end_residual < 1e-10
+    assert abs(default_gait.double_support.impulses.closure_residual) < 1e-9
 
 
 def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
@@ -44,7 +46,7 @@ def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
     j1, j2 = problem.j1, problem.j2
     assert np.abs(j1 @ sol.xd_minus).max() < 1e-9  # old stance tip still at rest before the impact
     assert np.abs(j2 @ sol.xd_plus).max() < 1e-9  # new stance tip at rest after the passive impact
-    assert np.abs(j2 @ np.array(default_gait.Xd_a)).max() < 1e-12  # and at the start of the next step
+    assert np.abs(j2 @ np.array(default_gait.double_support.xd_a)).max() < 1e-12  # and at the start of the next step
     assert j2[2] @ sol.xd_minus <= 1e-12 and j1[2] @ sol.xd_plus >= -1e-12  # sign constraints
     for reaction in (sol.ir1_minus, sol.ir2, sol.ir2_plus):
         assert reaction[2] >= -1e-12
@@ -53,7 +55,7 @@ def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
 
 def test_lp_optimum_is_certified_two_ways(planner, default_gait):
     """The dual certificate from HiGHS, and the same LP solved by HiGHS's interior point."""
-    assert default_gait.lp_duality_gap < 1e-9
+    assert default_gait.double_support.impulses.duality_gap < 1e-9
     problem = impact_problem(planner, default_gait)
     a, b = problem.equations()
     keep = np.arange(42) != int(np.argmax(np.abs(problem.left_null_vector())))
@@ -80,10 +82,10 @@ def test_lp_optimum_is_certified_two_ways(planner, default_gait):
 
 
 def test_ground_reaction_two_ways(planner, default_gait):
-    traj = default_gait.trajectory
+    samples = default_gait.figures.samples
     flow = planner.flow
-    for i in range(0, len(traj["t"]), 9):
-        q, qd = np.array(traj["q"][i]), np.array(traj["qd"][i])
+    for i in range(0, len(samples.t), 9):
+        q, qd = samples.q[i], samples.qd[i]
         qdd = flow.acceleration(q, qd)
         by_rnea = ground_reaction_inverse_dynamics(planner.model, q, qd, qdd)
         by_momentum = ground_reaction_momentum(planner.model, q, qd, qdd)
@@ -116,37 +118,37 @@ def test_gait_is_periodic_through_the_leg_exchange(planner, default_gait):
     xd_minus, xd_plus, xd_a = _apply_impulses(problem, sol)
     assert np.allclose(xd_minus, sol.xd_minus, atol=1e-9)
     assert np.allclose(xd_plus, sol.xd_plus, atol=1e-9)
-    assert np.allclose(xd_a, default_gait.Xd_a, atol=1e-9)
+    assert np.allclose(xd_a, default_gait.double_support.xd_a, atol=1e-9)
     # In the next step's coordinates the state is again (q(0), qd(0)): an exact periodic orbit.
-    assert np.allclose(P_MATRIX @ np.array(default_gait.qT), default_gait.q0, atol=1e-14)
+    assert np.allclose(P_MATRIX @ np.array(default_gait.step.q_target), default_gait.step.q0, atol=1e-14)
     assert np.allclose(P_MATRIX @ xd_a[3:], default_gait.qd_a, atol=1e-9)
     # Two steps walked with the flow return to the same state (step 2 starts from the map).
-    run = planner.flow.propagate(P_MATRIX @ np.array(default_gait.qT), P_MATRIX @ xd_a[3:], default_gait.period)
-    assert np.allclose(run.q, default_gait.qT, atol=1e-9)
-    assert np.allclose(run.qd, default_gait.qd_b, atol=1e-8)
+    run = planner.flow.propagate(P_MATRIX @ np.array(default_gait.step.q_target), P_MATRIX @ xd_a[3:], default_gait.period)
+    assert np.allclose(run.q, default_gait.step.q_target, atol=1e-9)
+    assert np.allclose(run.qd, default_gait.step.qd_b, atol=1e-8)
 
 
 def test_angular_momentum_is_conserved_about_the_feet_line(planner, default_gait):
     bm = planner.model
-    q_t = np.array(default_gait.qT)
-    axis = np.array(default_gait.new_stance_foot) / np.linalg.norm(default_gait.new_stance_foot)
-    before = bm.momentum(q_t, np.array(default_gait.Xd_b))[1] @ axis
-    after = bm.momentum(q_t, np.array(default_gait.Xd_a))[1] @ axis
+    q_t = np.array(default_gait.step.q_target)
+    axis = np.array(default_gait.double_support.new_stance_foot) / np.linalg.norm(default_gait.double_support.new_stance_foot)
+    before = bm.momentum(q_t, np.array(default_gait.double_support.xd_b))[1] @ axis
+    after = bm.momentum(q_t, np.array(default_gait.double_support.xd_a))[1] @ axis
     assert after == pytest.approx(before, abs=1e-9)
     # The yaw momentum at T+ about the new foot is that about the old one shifted by r x p.
-    assert default_gait.H_Tplus[0] != pytest.approx(default_gait.H_Tplus[1], abs=1e-3)
+    assert default_gait.double_support.h_t_plus[0] != pytest.approx(default_gait.double_support.h_t_plus[1], abs=1e-3)
 
 
 def test_warm_start_reproduces_the_cold_solution_faster(planner, default_gait):
     warm = planner.plan(DEFAULT_REQUEST, guess=(np.array(default_gait.qd_a), default_gait.theta))
-    assert warm.bvp_iterations == 0
+    assert warm.step.iterations == 0
     near = planner.plan(
         dataclasses.replace(DEFAULT_REQUEST, arm_amplitude=DEFAULT_REQUEST.arm_amplitude + math.radians(1)),
         guess=(np.array(default_gait.qd_a), default_gait.theta),
     )
     cold = planner.plan(dataclasses.replace(DEFAULT_REQUEST, arm_amplitude=DEFAULT_REQUEST.arm_amplitude + math.radians(1)))
-    assert near.converged and near.bvp_iterations <= 4
-    assert near.dynamics_evaluations < cold.dynamics_evaluations
+    assert near.converged and near.step.iterations <= 4
+    assert near.step.evaluations < cold.step.evaluations
     assert near.theta == pytest.approx(cold.theta, abs=1e-10)
     assert np.allclose(near.qd_a, cold.qd_a, atol=1e-9)
     assert near.W == pytest.approx(cold.W, rel=1e-9)
@@ -156,15 +158,15 @@ def test_slack_closure_keeps_theta_zero_and_reports_s(planner):
     g = planner.plan(dataclasses.replace(DEFAULT_REQUEST, closure="slack"))
     assert g.converged and g.admissible
     assert g.theta == 0.0
-    assert 0 < abs(g.slack) < 0.01  # rad/s: a small correction along z_d
-    assert abs(g.closure_residual) < 1e-9
-    assert g.impact_equation_residual < 1e-9
+    assert 0 < abs(g.double_support.slack) < 0.01  # rad/s: a small correction along z_d
+    assert abs(g.double_support.impulses.closure_residual) < 1e-9
+    assert g.double_support.impulses.equation_residual < 1e-9
 
 
 def test_quadratic_effort_by_osqp(planner, default_gait):
     g = planner.plan(dataclasses.replace(DEFAULT_REQUEST, effort="l2"))
     assert g.converged and g.admissible
-    assert g.impact_equation_residual < 1e-9
+    assert g.double_support.impulses.equation_residual < 1e-9
     assert g.W >= default_gait.W - 1e-9  # the L1 optimum is the least W of all solutions
     assert g.theta == pytest.approx(default_gait.theta, abs=1e-12)  # closure does not depend on effort
 
@@ -172,7 +174,7 @@ def test_quadratic_effort_by_osqp(planner, default_gait):
 def test_anti_normal_mode_and_table_parameters_also_solve(planner, default_gait):
     anti = planner.plan(dataclasses.replace(DEFAULT_REQUEST, mode="anti-normal"))
     assert anti.converged and anti.admissible
-    assert anti.q0[5] == pytest.approx(-DEFAULT_REQUEST.arm_amplitude)
+    assert anti.step.q0[5] == pytest.approx(-DEFAULT_REQUEST.arm_amplitude)
     table = GaitPlanner("aoustin2013-table").plan(dataclasses.replace(DEFAULT_REQUEST, params="aoustin2013-table"))
     assert table.converged and table.params == "aoustin2013-table"
     assert table.W != pytest.approx(default_gait.W, rel=1e-3)  # the arm inertia matters
@@ -181,7 +183,8 @@ def test_anti_normal_mode_and_table_parameters_also_solve(planner, default_gait)
 
 
 def test_a_solve_that_cannot_converge_says_so(planner):
-    bvp = solve_bvp(planner.model, planner.flow, 0.45, 0.45, 0.4, GaitMode.NORMAL, max_iter=1)
+    bvp = solve_bvp(planner.hybrid, planner.flow, 0.45, 0.45, 0.4, GaitMode.NORMAL,
+                    settings=dataclasses.replace(DEFAULTS, max_iterations=1))
     assert not bvp.converged and "no convergence in 1 Newton iterations" in bvp.message
     extreme = planner.plan(GaitRequest(step_length=1.7, period=0.05, arm_amplitude=1.5, mode="normal"))
     assert not extreme.admissible and extreme.reasons

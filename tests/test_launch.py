@@ -12,7 +12,7 @@ from pathlib import Path
 
 import yaml
 
-from biped_gait.ros.recorder import is_complete
+from biped_gait.recording.recover import is_complete
 
 LAUNCH = shutil.which("biped-gait-launch", path=str(Path(sys.executable).parent))
 

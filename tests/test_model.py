@@ -9,13 +9,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from biped_gait.boundary import P_MATRIX, GaitMode, boundary_configurations, exchange_legs
-from biped_gait.bvp import locked_rotation
-from biped_gait.model import BipedModel
-from biped_gait.params import load_params
-from biped_gait.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
+from biped_gait.core.configurations import GaitMode, boundary_configurations
+from biped_gait.core.hybrid import MIRROR, P_MATRIX, exchange, locked_rotation
+from biped_gait.core.model import BipedModel
+from biped_gait.core.params import load_params
+from biped_gait.core.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
 
-MIRROR = np.diag([1.0, -1.0, 1.0])
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +56,7 @@ def _random_double_support(rng) -> np.ndarray:
 def test_exchange_map_is_the_mirror_image(bm, seed):
     """FK(P q) = mirror(FK(q)) with legs and arms exchanged, translated to leg 2's tip."""
     q = _random_double_support(np.random.default_rng(seed))
-    before, after = _points(bm, q), _points(bm, exchange_legs(q))
+    before, after = _points(bm, q), _points(bm, exchange(q))
     new_origin = before["swing_foot"]
     swap = {
         "stance_foot": "swing_foot",

@@ -7,16 +7,16 @@ import math
 
 import pytest
 
-from biped_gait.gait import GaitPlanner, GaitRequest
-from biped_gait.optimize import (
-    ALPHA_TOLERANCE,
+from biped_gait.core.planner import GaitPlanner, GaitRequest
+from biped_gait.core.settings import DEFAULTS
+from biped_gait.studies.optimize import (
     END_POINT,
     INTERIOR,
     NoAdmissibleGait,
     compare_modes,
     optimal_arm_amplitude,
 )
-from biped_gait.params import load_params
+from biped_gait.core.params import load_params
 
 COARSE = math.radians(5.0)  # rad: a coarse bracket keeps these tests fast
 
@@ -38,7 +38,7 @@ def test_interior_minimum_is_a_local_minimum_of_w(planner, optimum):
     for alpha_deg in (25.0, 30.0):
         assert optimum.W <= planner.plan(GaitRequest(0.45, 0.45, math.radians(alpha_deg), "normal")).W + 1e-9
     assert optimum.evaluations > 10  # 10 coarse points, then the refinement
-    assert optimum.gait.trajectory["t"]  # the full gait, for Fig. 5
+    assert optimum.gait.figures.samples is not None  # the full gait, for Fig. 5
 
 
 def test_the_optimum_does_not_depend_on_the_coarse_step(planner, optimum):
@@ -67,10 +67,10 @@ def test_table_inertia_gives_an_end_point_not_an_optimum():
 
 def test_mode_comparison_solves_the_anti_normal_gait_at_the_normal_optimum(optimum):
     comparison = compare_modes(load_params(), 0.45, 0.45, coarse_step=COARSE)
-    assert comparison.normal.alpha == pytest.approx(optimum.alpha, abs=ALPHA_TOLERANCE)
+    assert comparison.normal.alpha == pytest.approx(optimum.alpha, abs=DEFAULTS.arm_tolerance)
     anti = comparison.anti_normal
     assert anti.mode == "anti-normal" and anti.arm_amplitude == comparison.normal.alpha
-    assert anti.admissible and anti.trajectory["t"]
+    assert anti.admissible and anti.figures.samples is not None
 
 
 @pytest.mark.parametrize(

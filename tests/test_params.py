@@ -7,8 +7,8 @@ from importlib import resources
 import pytest
 import yaml
 
-from biped_gait.model import BipedModel
-from biped_gait.params import load_params, shipped_param_names
+from biped_gait.core.model import BipedModel
+from biped_gait.core.params import load_params, shipped_param_names
 
 
 @pytest.mark.parametrize("name", ["aoustin2013", "aoustin2013-table"])
@@ -29,7 +29,7 @@ def test_default_set_corrects_only_the_arm_inertia():
 
 
 def _edited(tmp_path, edit) -> str:
-    raw = yaml.safe_load(resources.files("biped_gait.data").joinpath("aoustin2013.yaml").read_text())
+    raw = yaml.safe_load(resources.files("biped_gait.core.data").joinpath("aoustin2013.yaml").read_text())
     edit(raw)
     path = tmp_path / "edited.yaml"
     path.write_text(yaml.safe_dump(raw))

@@ -15,11 +15,12 @@ from mcap_ros2.reader import read_ros2_messages
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
 
-from biped_gait.gait import GaitRequest
+from biped_gait.core.planner import GaitRequest
+from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
-from .ros_helpers import RosSide, start_node, stop_node
+from .ros_helpers import start_node, stop_node
 
 SERVICE = "/biped_gait_planner/plan_gait"
 TOPIC = "/biped_gait_planner/gait_plan"
@@ -43,7 +44,7 @@ def planner_process(node_dir):
 
 @pytest.fixture(scope="module")
 def ros(planner_process):
-    side = RosSide("planner_test_client")
+    side = ClientSide("planner_test_client")
     side.client = side.node.create_client(PlanGait, SERVICE)
     side.connect(side.client)
     yield side
@@ -56,15 +57,15 @@ def test_service_answer_equals_the_core(ros, planner, default_gait):
     plan = response.plan
     assert plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
     assert plan.theta == pytest.approx(default_gait.theta, abs=1e-13)
-    assert np.allclose(plan.i_minus, default_gait.I_minus, atol=1e-10)
-    assert np.allclose(plan.i_plus, default_gait.I_plus, atol=1e-10)
+    assert np.allclose(plan.i_minus, default_gait.double_support.impulses.i_minus, atol=1e-10)
+    assert np.allclose(plan.i_plus, default_gait.double_support.impulses.i_plus, atol=1e-10)
     assert np.allclose(plan.qd_a, default_gait.qd_a, atol=1e-12)
     assert plan.converged and plan.admissible
-    assert len(plan.trajectory.points) == len(default_gait.trajectory["t"])
+    assert len(plan.trajectory.points) == len(default_gait.figures.samples.t)
     assert plan.trajectory.joint_names[0] == "stance_ankle_roll"
     last = plan.trajectory.points[-1]
     assert last.time_from_start.sec + 1e-9 * last.time_from_start.nanosec == pytest.approx(0.45, abs=1e-9)
-    assert np.allclose(last.positions, default_gait.qT, atol=1e-9)
+    assert np.allclose(last.positions, default_gait.step.q_target, atol=1e-9)
 
 
 BAD_REQUESTS = [
@@ -143,7 +144,7 @@ def test_recording_holds_every_call_and_plan(tmp_path, stop_signal):
     name = f"recorded_planner_{stop_signal}"
     service, topic = f"/{name}/plan_gait", f"/{name}/gait_plan"
     proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", f"record_dir:={tmp_path / 'bags'}", cwd=tmp_path)
-    side = RosSide("recording_test_client")
+    side = ClientSide("recording_test_client")
     try:
         client = side.node.create_client(PlanGait, service)
         side.connect(client)
@@ -209,7 +210,7 @@ def action_client(ros):
 def test_the_action_reports_progress_and_finds_the_optimum(ros, action_client, planner):
     from action_msgs.msg import GoalStatus
 
-    from biped_gait.optimize import optimal_arm_amplitude
+    from biped_gait.studies.optimize import optimal_arm_amplitude
 
     handle, feedback = send_goal(ros, action_client)
     result_future = handle.get_result_async()

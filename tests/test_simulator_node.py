@@ -16,11 +16,12 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
 from biped_gait.cli import main as cli_main
-from biped_gait.ros.recorder import is_complete
-from biped_gait.urdf import PHYSICAL_JOINTS
+from biped_gait.recording.recover import is_complete
+from biped_gait.core.urdf import PHYSICAL_JOINTS
+from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from .ros_helpers import RosSide, read_bag, start_node, stop_node
+from .ros_helpers import read_bag, start_node, stop_node
 
 PLANNER = "sim_test_planner"
 
@@ -98,7 +99,7 @@ def test_the_recording_holds_what_was_published(twenty_steps):
 
 def test_an_independent_subscriber_sees_the_topics(planner_node, tmp_path):
     """Real time (factor 1), two steps: names, frames and the 500 Hz rate in wall time."""
-    side = RosSide("sim_topic_listener")
+    side = ClientSide("sim_topic_listener")
     got: dict[str, list] = {"joints": [], "odom": [], "momentum": [], "events": []}
     try:
         side.node.create_subscription(JointState, "/joint_states", lambda m: got["joints"].append((time.monotonic(), m)), 1000)
@@ -144,7 +145,7 @@ def test_sigterm_leaves_a_complete_recording(planner_node, tmp_path):
 
 
 def test_sigkill_loses_at_most_the_last_chunk(planner_node, tmp_path):
-    side = RosSide("sim_kill_listener")
+    side = ClientSide("sim_kill_listener")
     stamps: list[int] = []
     try:
         side.node.create_subscription(

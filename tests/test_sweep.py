@@ -10,10 +10,10 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.executors import open_executor
-from biped_gait.gait import GaitRequest
-from biped_gait.params import load_params
-from biped_gait.sweep import (
+from biped_gait.studies.executors import open_executor
+from biped_gait.core.planner import GaitRequest
+from biped_gait.core.params import load_params
+from biped_gait.studies.sweep import (
     MAX_CASES,
     SweepGrid,
     continue_in_period,
@@ -22,7 +22,7 @@ from biped_gait.sweep import (
     solve_grid,
     solve_near,
 )
-from biped_gait.sweep_output import SweepFiles, csv_columns
+from biped_gait.studies.sweep_output import SweepFiles, csv_columns
 
 from .conftest import DEFAULT_REQUEST
 
@@ -94,7 +94,7 @@ def test_chain_by_continuation_equals_cold_solves(planner):
         assert warm.converged and warm.admissible
         assert warm.W == pytest.approx(cold.W, rel=1e-9)
         assert warm.theta == pytest.approx(cold.theta, abs=1e-10)
-    assert chain[1].dynamics_evaluations < chain[0].dynamics_evaluations  # warm-started from its neighbour
+    assert chain[1].step.evaluations < chain[0].step.evaluations  # warm-started from its neighbour
 
 
 def test_a_failed_warm_start_is_solved_again_cold(planner, default_gait):
@@ -110,7 +110,7 @@ def test_continuation_in_period_reaches_the_human_like_gait(planner):
     cold = solve_chain(planner, 0.45, 0.50, "normal", (0.0,))[0]
     assert cold.converged and not cold.admissible and "swing knee bends backwards" in cold.reasons[0]
     seeded = solve_chain(planner, 0.45, 0.50, "normal", (0.0,), seed_period=0.45)[0]
-    assert seeded.admissible and seeded.q9_min >= -1e-9
+    assert seeded.admissible and seeded.figures.q9_min >= -1e-9
     assert continue_in_period(planner, 0.45, 0.45, 0.50, 0.0, "normal") is not None
 
 

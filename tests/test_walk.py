@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.walk import Walker
+from biped_gait.core.walk import PlannedOrbit, Walker
 
 
 def walk(walker: Walker, steps: int):
@@ -22,7 +22,7 @@ def walk(walker: Walker, steps: int):
 
 
 def test_twenty_steps_land_on_the_plan(planner, default_gait):
-    walker = Walker(planner.model, default_gait, rate=500.0)
+    walker = Walker(planner.hybrid, PlannedOrbit.of(default_gait), rate=500.0)
     outcomes = walk(walker, 20)
     assert all(o.touchdown is not None for o in outcomes) and len(outcomes) == 20
     errors = [o.touchdown.state_error for o in outcomes]
@@ -45,7 +45,7 @@ def test_twenty_steps_land_on_the_plan(planner, default_gait):
 def test_open_loop_aiming_is_unstable(planner, default_gait):
     """Aiming only at the plan's post-impact velocity, an error grows by orders of magnitude per
     step: the reason the walker re-aims (see biped_gait/walk.py)."""
-    walker = Walker(planner.model, default_gait, rate=100.0, reaim=False)
+    walker = Walker(planner.hybrid, PlannedOrbit.of(default_gait), rate=100.0, reaim=False)
     outcomes = walk(walker, 5)
     errors = [o.touchdown.state_error for o in outcomes if o.touchdown is not None]
     print("\nopen-loop state error per step:", " ".join(f"{e:.1e}" for e in errors))
@@ -54,16 +54,16 @@ def test_open_loop_aiming_is_unstable(planner, default_gait):
 
 
 def test_samples_are_on_the_publishing_grid(planner, default_gait):
-    walker = Walker(planner.model, default_gait, rate=1000.0)
+    walker = Walker(planner.hybrid, PlannedOrbit.of(default_gait), rate=1000.0)
     first, second = walk(walker, 2)
     times = np.array([s.t for s in first.samples + second.samples])
     assert np.allclose(np.diff(times), 1e-3, atol=1e-12)
     assert first.samples[0].t == 0.0
-    assert np.allclose(first.samples[0].q, default_gait.q0) and np.allclose(first.samples[0].qd, default_gait.qd_a)
+    assert np.allclose(first.samples[0].q, default_gait.step.q0) and np.allclose(first.samples[0].qd, default_gait.qd_a)
 
 
 def test_a_shove_makes_it_fall_and_the_walker_says_why(planner, default_gait):
-    walker = Walker(planner.model, default_gait, rate=200.0)
+    walker = Walker(planner.hybrid, PlannedOrbit.of(default_gait), rate=200.0)
     walk(walker, 2)
     walker.shove(np.array([0.0, -3.0, 0, 0, 0, 0, 0, 0, 0]))  # pitch the stance leg backwards hard
     outcome = walker.walk_step()
@@ -72,11 +72,11 @@ def test_a_shove_makes_it_fall_and_the_walker_says_why(planner, default_gait):
 
 
 def test_walker_refuses_a_failed_plan(planner):
-    from biped_gait.gait import GaitRequest
+    from biped_gait.core.planner import GaitRequest
 
     failed = planner.plan(GaitRequest(0.45, 5.0, 0.4, "normal"))
     with pytest.raises(ValueError, match="did not converge"):
-        Walker(planner.model, failed, rate=500.0)
+        Walker(planner.hybrid, PlannedOrbit.of(failed), rate=500.0)
     good = planner.plan(GaitRequest(0.45, 0.45, math.radians(20), "normal"))
     with pytest.raises(ValueError, match="publishing rate must be positive"):
-        Walker(planner.model, good, rate=0.0)
+        Walker(planner.hybrid, PlannedOrbit.of(good), rate=0.0)

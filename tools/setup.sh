@@ -18,8 +18,8 @@ fi
 # The compiled twin of the ballistic flow (C++ over the wheels' Pinocchio), rebuilt when its
 # source changes.
 nstamp=.venv/.native.sha
-nwant=$(cat biped_gait/native/flow.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
-if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/_flow_native*.so > /dev/null 2>&1; then
+nwant=$(cat biped_gait/core/native/flow.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/_flow_native*.so > /dev/null 2>&1; then
   bash tools/build_native.sh
   echo "$nwant" > "$nstamp"
 fi

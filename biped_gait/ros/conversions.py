@@ -1,12 +1,13 @@
-"""Translation between ROS messages and the core's request and result objects.
-
-No physics here: field-by-field conversion, units unchanged (SI, radians).
+"""Translation between ROS messages and the core's objects. No physics here: field-by-field
+conversion driven by the core's field list (``core.gait_views.FIELDS``), units unchanged (SI,
+radians). The gait mode is parsed here, at the edge, from the messages' codes.
 """
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
 from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import Vector3
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -14,19 +15,21 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
-from ..boundary import GaitMode
-from ..gait import GaitRequest
-from ..model import JOINT_NAMES
-from ..result import GaitResult
+from ..core.configurations import GaitMode
+from ..core.gait import Gait
+from ..core.gait_views import FIELDS
+from ..core.model import JOINT_NAMES
+from ..core.planner import GaitRequest
+from ..core.walk import PlannedOrbit
+from ..recording.topics import MODE_CODES
 
-MODE_FROM_MSG = {PlanGait.Request.NORMAL: GaitMode.NORMAL, PlanGait.Request.ANTI_NORMAL: GaitMode.ANTI_NORMAL}
-MODE_TO_MSG = {mode: code for code, mode in MODE_FROM_MSG.items()}
+MODE_TO_MSG = {mode: code for code, mode in MODE_CODES.items()}
 
 
 def mode_from_msg(code: int) -> GaitMode:
     """GaitMode of a message's ``mode`` field; ``ValueError`` for an unknown code."""
     try:
-        return MODE_FROM_MSG[code]
+        return MODE_CODES[code]
     except KeyError:
         raise ValueError(f"unknown gait mode {code}: use NORMAL (0) or ANTI_NORMAL (1)") from None
 
@@ -46,18 +49,8 @@ def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
 
 def request_key(request: GaitRequest) -> tuple:
     """Hashable identity of a request, for the planner's cache."""
-    return (request.step_length, request.period, request.arm_amplitude, GaitMode.parse(request.mode).value,
+    return (request.step_length, request.period, request.arm_amplitude, request.mode.value,
             request.params, request.closure, request.effort)
-
-
-def _fixed(values: list[float], size: int) -> list[float]:
-    """A fixed-size array field: the values, or NaN where the solve produced none."""
-    return [float(v) for v in values] if len(values) == size else [math.nan] * size
-
-
-def _vector(values: list[float]) -> Vector3:
-    x, y, z = _fixed(values, 3)
-    return Vector3(x=x, y=y, z=z)
 
 
 def duration_msg(seconds: float) -> Duration:
@@ -66,56 +59,49 @@ def duration_msg(seconds: float) -> Duration:
     return Duration(sec=nanos // 1_000_000_000, nanosec=nanos % 1_000_000_000)
 
 
-def trajectory_msg(result: GaitResult) -> JointTrajectory:
-    """The ballistic step as a JointTrajectory of the model's joints q1..q9 (no header stamp)."""
+def trajectory_msg(gait: Gait) -> JointTrajectory:
+    """The ballistic step as a JointTrajectory of the model's joints q1..q9 (no header stamp):
+    positions (rad), velocities (rad/s), accelerations (rad/s^2), and efforts (N m) zero, as
+    no joint torque acts in the ballistic single support."""
     traj = JointTrajectory(joint_names=list(JOINT_NAMES))
-    samples = result.trajectory
-    for t, q, qd in zip(samples.get("t", []), samples.get("q", []), samples.get("qd", [])):
-        traj.points.append(JointTrajectoryPoint(positions=list(q), velocities=list(qd), time_from_start=duration_msg(t)))
+    samples = gait.figures.samples if gait.figures is not None else None
+    if samples is not None:
+        zero = [0.0] * len(JOINT_NAMES)
+        for t, q, qd, qdd in zip(samples.t, samples.q, samples.qd, samples.qdd):
+            traj.points.append(JointTrajectoryPoint(positions=q.tolist(), velocities=qd.tolist(),
+                                                    accelerations=qdd.tolist(), effort=zero,
+                                                    time_from_start=duration_msg(t)))
     return traj
 
 
-# Fields with the same meaning in GaitResult and GaitPlan: (result attribute, message field).
-SCALARS = (
-    ("step_length", "step_length"), ("period", "period"), ("arm_amplitude", "arm_amplitude"),
-    ("params", "params"), ("closure", "closure"), ("effort", "effort"), ("converged", "converged"),
-    ("admissible", "admissible"), ("theta", "theta"), ("slack", "slack"), ("W", "effort_cost"),
-    ("min_grf_z", "min_grf_z"), ("min_swing_height", "min_swing_height"),
-    ("max_friction_ratio", "max_friction_ratio"), ("closure_residual", "closure_residual"),
-    ("solve_time_s", "solve_time"),
-)
-ARRAYS = (  # (result attribute, message field, fixed size)
-    ("I_minus", "i_minus", 7), ("I_plus", "i_plus", 7), ("Xd_minus", "xd_minus", 12), ("Xd_plus", "xd_plus", 12),
-    ("Xd_a", "xd_a", 12), ("Xd_b", "xd_b", 12), ("q0", "q0", 9), ("qT", "q_t", 9), ("qd_a", "qd_a", 9),
-    ("qd_b", "qd_b", 9), ("H_Tminus", "h_t_minus", 2), ("H_Tplus", "h_t_plus", 2),
-)
-VECTORS = (("IR1_minus", "ir1_minus"), ("IR2", "ir2"), ("IR2_plus", "ir2_plus"))
+def _fixed(values, size: int) -> list[float]:
+    """A fixed-size array field: the values, or NaN where the solve produced none."""
+    return [float(v) for v in values] if len(values) == size else [math.nan] * size
 
 
-def plan_msg(result: GaitResult, header) -> GaitPlan:
-    """GaitPlan message of a core result, stamped with ``header``."""
-    msg = GaitPlan(header=header, mode=MODE_TO_MSG[GaitMode.parse(result.mode)], reasons=list(result.reasons),
-                   trajectory=trajectory_msg(result))
-    for attr, name in SCALARS:
-        setattr(msg, name, getattr(result, attr))
-    for attr, name, size in ARRAYS:
-        setattr(msg, name, _fixed(getattr(result, attr), size))
-    for attr, name in VECTORS:
-        setattr(msg, name, _vector(getattr(result, attr)))
+def plan_msg(gait: Gait, header) -> GaitPlan:
+    """GaitPlan message of a core gait, stamped with ``header``."""
+    msg = GaitPlan(header=header, mode=MODE_TO_MSG[gait.mode], reasons=list(gait.reasons),
+                   trajectory=trajectory_msg(gait))
+    for f in FIELDS:
+        if f.msg is None:
+            continue
+        value = f.read(gait)
+        if f.vector:
+            x, y, z = _fixed(value, 3)
+            value = Vector3(x=x, y=y, z=z)
+        elif f.size is not None:
+            value = _fixed(value, f.size)
+        setattr(msg, f.msg, value)
     msg.trajectory.header = header
     return msg
 
 
-def result_from_plan(msg: GaitPlan) -> GaitResult:
-    """The core result of a GaitPlan message (all figures; the trajectory is not copied)."""
-    result = GaitResult(step_length=msg.step_length, period=msg.period, arm_amplitude=msg.arm_amplitude,
-                        mode=mode_from_msg(msg.mode).value, params=msg.params, closure=msg.closure, effort=msg.effort)
-    result.reasons = list(msg.reasons)
-    for attr, name in SCALARS:
-        setattr(result, attr, getattr(msg, name))
-    for attr, name, _ in ARRAYS:
-        setattr(result, attr, [float(v) for v in getattr(msg, name)])
-    for attr, name in VECTORS:
-        v = getattr(msg, name)
-        setattr(result, attr, [v.x, v.y, v.z])
-    return result
+def orbit_from_msg(msg: GaitPlan) -> PlannedOrbit:
+    """What a walk needs of a GaitPlan message."""
+    return PlannedOrbit(
+        params=msg.params, step_length=msg.step_length, period=msg.period, arm_amplitude=msg.arm_amplitude,
+        mode=mode_from_msg(msg.mode), effort=msg.effort, q0=np.array(msg.q0), q_t=np.array(msg.q_t),
+        qd_a=np.array(msg.qd_a), qd_b=np.array(msg.qd_b), converged=msg.converged, admissible=msg.admissible,
+        reasons=tuple(msg.reasons),
+    )

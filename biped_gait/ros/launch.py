@@ -33,13 +33,23 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _start(entry: str, config: Path | None) -> subprocess.Popen:
+def start_entry(entry: str, ros_args: list[str] = (), log: Path | None = None, cwd: Path | None = None,
+                own_session: bool = False) -> subprocess.Popen:
+    """Start the entry point ``entry`` (e.g. ``biped-gait-planner``) of this environment with
+    ``--ros-args ros_args``; its output goes to the file ``log`` if given (never to a pipe
+    nobody reads), else to ours. ``own_session``: in a process group of its own, so that a
+    terminal's Ctrl-C reaches only the caller, which forwards it."""
     exe = shutil.which(entry, path=str(Path(sys.executable).parent)) or shutil.which(entry)
     if exe is None:
         raise FileNotFoundError(f"entry point {entry} is not installed")
-    args = [exe] + (["--ros-args", "--params-file", str(config)] if config else [])
-    # Own process group: a terminal's Ctrl-C reaches us only; we forward it, in order.
-    return subprocess.Popen(args, env=os.environ, start_new_session=True)
+    args = [exe] + (["--ros-args", *ros_args] if ros_args else [])
+    out = open(log, "wb") if log is not None else None
+    try:
+        return subprocess.Popen(args, cwd=cwd, env=dict(os.environ), stdout=out, stderr=subprocess.STDOUT if out else None,
+                                start_new_session=own_session)
+    finally:
+        if out is not None:
+            out.close()
 
 
 def stop_process(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout: float = 20.0) -> int:
@@ -68,8 +78,9 @@ def main(argv: list[str] | None = None) -> int:
         stopping.append(signum)
 
     previous = {sig: signal.signal(sig, forward) for sig in (signal.SIGINT, signal.SIGTERM)}
-    planner = _start(PLANNER, args.config)
-    simulator = _start(SIMULATOR, args.config)
+    ros_args = ["--params-file", str(args.config)] if args.config else []
+    planner = start_entry(PLANNER, ros_args, own_session=True)
+    simulator = start_entry(SIMULATOR, ros_args, own_session=True)
     try:
         while simulator.poll() is None and planner.poll() is None and not stopping:
             time.sleep(0.05)

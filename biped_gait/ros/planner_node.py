@@ -23,32 +23,30 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
+from dataclasses import replace
+
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Header
 
 from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
-from ..gait import GaitPlanner
-from ..optimize import COARSE_STEP, Canceled, NoAdmissibleGait, optimal_arm_amplitude, usable
-from ..params import DEFAULT_PARAMS, load_params, shipped_param_names
+from ..core.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from ..core.planner import GaitPlanner
+from ..core.settings import DEFAULTS
+from ..recording.writer import McapRecorder
+from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
 from .process import run_node
-from .recorder import McapRecorder
+from .qos import EVENTS, LATCHED
+from .recorded import RecordedPublisher
 
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
-LATCHED = QoSProfile(
-    depth=1,
-    history=HistoryPolicy.KEEP_LAST,
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-)
 
 
 class GaitPlannerNode(Node):
@@ -64,7 +62,16 @@ class GaitPlannerNode(Node):
         self._cache: OrderedDict[tuple, GaitPlan] = OrderedDict()
         self._cache_lock = threading.Lock()
         self._sequence = 0
-        self.plan_publisher = self.create_publisher(GaitPlan, "~/gait_plan", LATCHED)
+        self.settings = replace(DEFAULTS, samples=value("trajectory_samples").value, tolerance=value("bvp_tolerance").value,
+                                max_iterations=value("max_iterations").value)
+        self.recorder: McapRecorder | None = None
+        if value("record").value:
+            stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
+            self.recorder = McapRecorder(value("record_dir").value, f"planner_{stamp}")
+            self.get_logger().info(f"recording to {self.recorder.path}")
+        self.plan_publisher = RecordedPublisher(self, GaitPlan, "~/gait_plan", LATCHED, self.recorder)
+        self.call_recorder = RecordedPublisher(self, PlanGaitCall, "~/plan_gait/calls", EVENTS, self.recorder,
+                                               publish=False)
         # One group each: the service keeps answering while an optimization runs; each group
         # owns its planners (Pinocchio data are not shared between threads).
         self._service_group = MutuallyExclusiveCallbackGroup()
@@ -81,12 +88,6 @@ class GaitPlannerNode(Node):
             cancel_callback=lambda _goal: CancelResponse.ACCEPT,
             callback_group=self._action_group,
         )
-        self.recorder: McapRecorder | None = None
-        if value("record").value:
-            stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
-            self.recorder = McapRecorder(value("record_dir").value, f"planner_{stamp}")
-            self.get_logger().info(f"recording to {self.recorder.path}")
-        self.call_topic = self.resolve_service_name("~/plan_gait") + "/calls"
 
     def _declare_parameters(self) -> None:
         def desc(text: str, **ranges) -> ParameterDescriptor:
@@ -95,13 +96,13 @@ class GaitPlannerNode(Node):
         self.declare_parameter("default_params", DEFAULT_PARAMS,
                                desc(f"parameter set used when a request names none: {', '.join(shipped_param_names())} "
                                     "or a YAML file", read_only=True))
-        self.declare_parameter("bvp_tolerance", 1e-12, desc(
+        self.declare_parameter("bvp_tolerance", DEFAULTS.tolerance, desc(
             "bound on the BVP end-point residual (rad) and closure gap (kg m^2/s)",
             floating_point_range=[FloatingPointRange(from_value=1e-14, to_value=1e-6)], read_only=True))
-        self.declare_parameter("max_iterations", 30, desc(
+        self.declare_parameter("max_iterations", DEFAULTS.max_iterations, desc(
             "Newton iterations allowed per solve", integer_range=[IntegerRange(from_value=1, to_value=200, step=1)],
             read_only=True))
-        self.declare_parameter("trajectory_samples", 91, desc(
+        self.declare_parameter("trajectory_samples", DEFAULTS.samples, desc(
             "samples of the ballistic step in each plan's trajectory",
             integer_range=[IntegerRange(from_value=2, to_value=2001, step=1)], read_only=True))
         self.declare_parameter("cache_size", 256, desc(
@@ -116,13 +117,7 @@ class GaitPlannerNode(Node):
             raise ValueError(f"unknown parameter set {params!r}: give one of {', '.join(shipped_param_names())}")
         key = (group, params)
         if key not in self._planners:
-            value = self.get_parameter
-            self._planners[key] = GaitPlanner(
-                params,
-                samples=value("trajectory_samples").value,
-                tol=value("bvp_tolerance").value,
-                max_iter=value("max_iterations").value,
-            )
+            self._planners[key] = GaitPlanner(params, self.settings)
         return self._planners[key]
 
     def _header(self) -> Header:
@@ -163,9 +158,7 @@ class GaitPlannerNode(Node):
             self._cache[key] = plan
             while len(self._cache) > self.get_parameter("cache_size").value:
                 self._cache.popitem(last=False)
-        self.plan_publisher.publish(plan)
-        if self.recorder is not None:
-            self._record(self.plan_publisher.topic_name, plan, transient_local=True)
+        self._record(self.plan_publisher, plan)
 
     def _record_call(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
         """Record the exchange as a PlanGaitCall; a recording failure is logged, never raised."""
@@ -177,22 +170,23 @@ class GaitPlannerNode(Node):
         fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
         call = PlanGaitCall(header=self._header(), sequence=sequence, success=response.success,
                             message=response.message, plan=response.plan, **fields)
-        self._record(self.call_topic, call)
+        self._record(self.call_recorder, call)
 
-    def _record(self, topic: str, msg, transient_local: bool = False) -> None:
+    def _record(self, publisher: RecordedPublisher, msg) -> None:
+        """Publish (if live) and record ``msg``; a recording failure is logged, never raised."""
         try:
-            self.recorder.write(topic, msg, transient_local=transient_local)
+            publisher.publish(msg)
         except Exception as exc:  # noqa: BLE001  the answer matters more than its record
-            self.get_logger().error(f"recording on {topic} failed: {exc!r}")
+            self.get_logger().error(f"publishing or recording on {publisher.topic} failed: {exc!r}")
 
     def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
         goal = goal_handle.request
         result = OptimizeArmSwing.Result()
         evaluated: list[tuple[float, float]] = []
-        expected = 1 + round((goal.alpha_max - goal.alpha_min) / COARSE_STEP) + 20  # coarse sweep + refinement
+        expected = expected_solves((goal.alpha_min, goal.alpha_max))
 
         def on_result(gait) -> None:
-            effort = gait.W if usable(gait) else math.nan
+            effort = gait.W if gait.usable else math.nan
             evaluated.append((gait.arm_amplitude, effort))
             progress = min(0.99, len(evaluated) / expected)
             goal_handle.publish_feedback(OptimizeArmSwing.Feedback(progress=progress, alpha=gait.arm_amplitude, effort=effort))

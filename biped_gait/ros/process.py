@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import signal
 import sys
-from typing import Callable, Protocol
+from typing import Callable
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
@@ -16,10 +16,6 @@ from rclpy.node import Node
 
 class Terminated(Exception):
     """Raised in the main thread when SIGTERM arrives."""
-
-
-class ClosableNode(Protocol):
-    def close(self) -> None: ...
 
 
 def _on_sigterm(_signum, _frame) -> None:

@@ -31,7 +31,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.utilities import remove_ros_args
 from std_srvs.srv import Trigger
 
-from ..analyze import Bag, BagError, open_bag
+from ..recording.reader import Bag, BagError, open_bag
 from ..arguments import OneLineParser
 from .process import run_node
 

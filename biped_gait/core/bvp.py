@@ -1,0 +1,208 @@
+"""The ballistic boundary-value problem with exact periodic closure (docs/model.md sections 3-4).
+
+Unknowns: qd(0) (9) and, in the ``theta`` closure, the trunk pitch theta at double support.
+Equations: q(T; q0(theta), qd(0)) = q_T(theta) (9) and, in the ``theta`` closure, the
+conservation of the angular momentum about the foot-to-foot line through the double support,
+z_d^T D_e(q_T) (Xd^a - Xd^b) = 0 (1), from the hybrid step's impact map. Solved by the
+project's Newton/chord solver (``newton``) with the exact Jacobian of the computed flow map
+(variational equations).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import newton
+from .configurations import THETA_DIRECTION, GaitMode, boundary_configurations
+from .flow import BallisticFlow, FlowResult
+from .hybrid import HybridStep
+from .settings import DEFAULTS, Settings
+
+CLOSURES = ("theta", "slack")
+# How the solver's outcomes read in a gait's message.
+_MESSAGES = {newton.DIVERGED: "the integration diverged (non-finite state)", newton.SINGULAR: "singular shooting Jacobian"}
+
+
+@dataclass(frozen=True)
+class BvpSolution:
+    """Result of the shooting (the gait's ballistic step): always returned, ``converged`` says
+    whether to trust it. Angles rad, velocities rad/s, ``closure_gap`` kg m^2/s."""
+
+    converged: bool
+    message: str
+    iterations: int
+    theta: float
+    q0: np.ndarray
+    q_target: np.ndarray
+    qd_a: np.ndarray
+    qd_b: np.ndarray
+    end_residual: float
+    closure_gap: float
+    evaluations: int
+    nodes: tuple | None = None  # fine-grid nodes (t, q, qd, qdd) of the returned trajectory
+
+
+class ShootingProblem:
+    """The residual F(u) of the shooting problem, u = [qd(0), theta], and its exact Jacobian,
+    for one (L m, T s, alpha rad, mode)."""
+
+    def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode):
+        self.hybrid, self.period = hybrid, period
+        self.leg_length = hybrid.bm.params.leg_length
+        self.step_length, self.alpha, self.mode = step_length, alpha, mode
+        self.evaluations = 0
+
+    def ends(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
+        """q(0) and q(T) at trunk pitch ``theta`` (rad)."""
+        return boundary_configurations(self.step_length, self.leg_length, self.alpha, self.mode, theta)
+
+    def __call__(self, flow: BallisticFlow, u: np.ndarray, with_theta: bool, jacobian: bool,
+                 keep_nodes: bool = False) -> tuple[np.ndarray, np.ndarray | None, FlowResult]:
+        """F (9 or 10), dF/du when ``jacobian`` (else None), and the flow's result."""
+        n_unknown = 10 if with_theta else 9
+        theta = u[9]
+        q0, q_t = self.ends(theta)
+        seeds = None
+        if jacobian:
+            seeds = np.zeros((18, n_unknown))
+            seeds[9:, :9] = np.eye(9)
+            if with_theta:
+                seeds[:9, 9] = THETA_DIRECTION
+        with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected and reported
+            res = flow.propagate(q0, u[:9], self.period, seeds, keep_nodes)
+        self.evaluations += res.evaluations
+        f = res.q - q_t
+        impact = self.hybrid.impact(q_t) if with_theta else None
+        if with_theta:
+            f = np.append(f, impact.closure_gap(u[:9], res.qd))
+        if not jacobian:
+            return f, None, res
+        jac = np.zeros((n_unknown, n_unknown))
+        jac[:9] = res.sens[:9]
+        if with_theta:
+            jac[:9, 9] -= THETA_DIRECTION
+            d_a, d_b = impact.closure_gradients()
+            jac[9, :9] = d_a + d_b @ res.sens[9:, :9]
+            # The gap's explicit dependence on theta through the configuration q_T(theta) is a
+            # smooth algebraic function: a central difference resolves it to ~1e-10 relative.
+            h = 1e-6
+            gap = lambda th: self.hybrid.impact(self.ends(th)[1]).closure_gap(u[:9], res.qd)  # noqa: E731
+            jac[9, 9] = (gap(theta + h) - gap(theta - h)) / (2 * h) + d_b @ res.sens[9:, 9]
+        return f, jac, res
+
+    def newton_residual(self, flow: BallisticFlow, u: np.ndarray, with_theta: bool) -> newton.NewtonResidual:
+        """F as the Newton solver takes it, over the free unknowns (qd(0), and theta if free);
+        a fixed theta is ``u[9]``."""
+        n = 10 if with_theta else 9
+
+        def fun(x: np.ndarray, jacobian: bool):
+            full = u.copy()
+            full[:n] = x
+            return self(flow, full, with_theta, jacobian)
+
+        return fun
+
+
+def solve_bvp(
+    hybrid: HybridStep,
+    flow: BallisticFlow,
+    step_length: float,
+    period: float,
+    arm_amplitude: float,
+    mode: GaitMode,
+    closure: str = "theta",
+    guess: tuple[np.ndarray, float] | None = None,
+    settings: Settings = DEFAULTS,
+    coarse: BallisticFlow | None = None,
+) -> BvpSolution:
+    """Solve the shooting problem on ``flow``'s grid; ``guess`` = (qd(0), theta) warm-starts it.
+
+    Without a guess, Newton starts from the straight-line velocity (q_T - q_0) / T with
+    theta = 0 held fixed, which leads to the human-like branch (swing knee flexion q9 >= 0);
+    the ``theta`` closure then frees theta from there (started cold with theta free, Newton
+    may reach the twin solution with the swing knee bent backwards).
+
+    With a ``coarse`` flow, Newton's iterations run on the coarse grid and the solution is
+    finished on ``flow``'s grid by chord steps with the coarse Jacobian, which the two grids
+    share to within the coarse grid's error; if that stalls, Newton continues on the fine grid.
+    ``settings.tolerance`` bounds the end-point residual (rad) and the closure gap (kg m^2/s).
+    """
+    if closure not in CLOSURES:
+        raise ValueError(f"unknown closure {closure!r}: use 'theta' or 'slack'")
+    with_theta = closure == "theta"
+    n = 10 if with_theta else 9
+    tol, max_iter = settings.tolerance, settings.max_iterations
+    system = ShootingProblem(hybrid, step_length, period, arm_amplitude, mode)
+    newton_flow = coarse or flow
+    # On the coarse grid, converging further than its own discretization error gains nothing.
+    newton_tol = max(tol, settings.coarse_tolerance) if coarse is not None else tol
+
+    def run_newton(u: np.ndarray, free_theta: bool, on: BallisticFlow, bound: float):
+        k = 10 if free_theta else 9
+        result = newton.newton(system.newton_residual(on, u, free_theta), u[:k], bound, max_iter)
+        u = u.copy()
+        u[:k] = result.x
+        return u, result
+
+    iterations = 0
+    if guess is None:
+        q0, q_t = system.ends(0.0)
+        u = np.concatenate([(q_t - q0) / period, [0.0]])
+        if with_theta:
+            u, result = run_newton(u, False, newton_flow, newton_tol)
+            iterations += result.iterations
+            if not result.converged:
+                return _solution(system, flow, u, with_theta, False, f"{_message(result)} (theta = 0 stage)", iterations)
+    else:
+        u = np.concatenate([np.asarray(guess[0], float), [guess[1] if with_theta else 0.0]])
+    u, result = run_newton(u, with_theta, newton_flow, newton_tol)
+    iterations += result.iterations
+    if not result.converged or coarse is None:
+        return _solution(system, flow, u, with_theta, result.converged, _message(result), iterations)
+    # Chord steps on the fine grid with the coarse Jacobian: linear convergence at the rate of
+    # the grids' Jacobian mismatch (about the coarse grid's relative error).
+
+    def fine(x: np.ndarray):
+        full = u.copy()
+        full[:n] = x
+        f, _, res = system(flow, full, with_theta, False, keep_nodes=True)
+        return f, res
+
+    finish = newton.chord(fine, u[:n], result.jacobian, tol, settings.chord_iterations, contraction=0.1)
+    u[:n] = finish.x
+    iterations += finish.iterations
+    if finish.converged:
+        return _solution(system, flow, u, with_theta, True, newton.CONVERGED, iterations, finish.aux)
+    u, result = run_newton(u, with_theta, flow, tol)
+    return _solution(system, flow, u, with_theta, result.converged, _message(result), iterations + result.iterations)
+
+
+def _message(result: newton.SolveResult) -> str:
+    return _MESSAGES.get(result.status, result.message)
+
+
+def _solution(system: ShootingProblem, flow: BallisticFlow, u: np.ndarray, with_theta: bool, ok: bool, message: str,
+              iterations: int, res: FlowResult | None = None) -> BvpSolution:
+    """Package the outcome; ``res`` is the fine-grid flow at ``u`` if already computed."""
+    if res is None or res.nodes is None:
+        _, _, res = system(flow, u, with_theta, False, keep_nodes=True)
+    theta = float(u[9]) if with_theta else 0.0
+    q0, q_t = system.ends(theta)
+    finite = np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.qd))
+    return BvpSolution(
+        converged=ok,
+        message=message,
+        iterations=iterations,
+        theta=theta,
+        q0=q0,
+        q_target=q_t,
+        qd_a=u[:9].copy(),
+        qd_b=res.qd.copy(),
+        end_residual=float(np.max(np.abs(res.q - q_t))) if finite else math.inf,
+        closure_gap=system.hybrid.impact(q_t).closure_gap(u[:9], res.qd) if finite else math.inf,
+        evaluations=system.evaluations,
+        nodes=res.nodes,
+    )

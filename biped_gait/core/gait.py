@@ -1,0 +1,121 @@
+"""One periodic gait, built once from typed immutable parts: the problem it solves, the
+ballistic step (the BVP's solution), the double support, the step's figures, and the verdict.
+
+SI units, angles in radians. Velocities in extended coordinates X = [x0, y0, z0, q1..q9] are in
+the step's frame: stance leg 1 on the right, stance tip at the world origin. The JSON form, the
+printed summary and the ROS message are views of a ``Gait`` (``gait_views``), all driven by one
+field list.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .admissibility import Verdict, failure_message
+from .bvp import BvpSolution
+from .configurations import GaitMode
+from .gait_views import summary, to_dict, to_json
+from .impulses import ImpulseSolution
+from .reports import StepFigures
+
+
+@dataclass(frozen=True)
+class GaitProblem:
+    """A validated gait request: L (m), T (s), alpha (rad), mode, parameter set name, closure
+    (``theta``/``slack``) and effort (``l1``/``l2``)."""
+
+    step_length: float
+    period: float
+    arm_amplitude: float
+    mode: GaitMode
+    params: str
+    closure: str
+    effort: str
+
+
+@dataclass(frozen=True)
+class DoubleSupport:
+    """The instantaneous double support of a gait (docs/model.md sections 4 and 6).
+
+    ``impulses``: the solution of eqs. (6)-(10) (``success`` False: the LP/QP's reason);
+    ``xd_b``, ``xd_a``: this step's end and the next step's start in this step's extended
+    coordinates (after the slack correction, when that closure is used); ``slack``: s (rad/s);
+    ``new_stance_foot``: the new stance tip (m); ``h_t_minus``/``h_t_plus``: yaw angular
+    momentum (kg m^2/s) about the vertical through the old and the new stance foot, at T- and
+    T+; the tip speeds (m/s) that the LP's sign constraints bound (NaN when it failed).
+    """
+
+    impulses: ImpulseSolution
+    xd_b: np.ndarray
+    xd_a: np.ndarray
+    slack: float
+    new_stance_foot: np.ndarray
+    h_t_minus: tuple[float, float]
+    h_t_plus: tuple[float, float]
+    swing_tip_vz_before_impact: float
+    old_stance_tip_vz_after_impact: float
+    new_stance_tip_speed_after: float
+
+
+@dataclass(frozen=True)
+class Gait:
+    """A solved gait: ``step`` always; ``double_support`` and ``figures`` when the BVP
+    converged; the ``verdict``; the solve's wall time (s)."""
+
+    problem: GaitProblem
+    step: BvpSolution
+    double_support: DoubleSupport | None
+    figures: StepFigures | None
+    verdict: Verdict
+    solve_time_s: float
+
+    # The request's figures, as every user of a gait reads them.
+    step_length = property(lambda self: self.problem.step_length, doc="L (m)")
+    period = property(lambda self: self.problem.period, doc="T (s)")
+    arm_amplitude = property(lambda self: self.problem.arm_amplitude, doc="alpha (rad)")
+    mode = property(lambda self: self.problem.mode, doc="the gait mode")
+    params = property(lambda self: self.problem.params, doc="name of the parameter set")
+    converged = property(lambda self: self.step.converged, doc="the ballistic BVP converged")
+    admissible = property(lambda self: self.verdict.admissible, doc="the gait can be walked")
+    reasons = property(lambda self: self.verdict.reasons, doc="why not, when not")
+    theta = property(lambda self: self.step.theta, doc="trunk pitch at double support (rad)")
+    qd_a = property(lambda self: self.step.qd_a, doc="qd(0) (rad/s)")
+
+    @property
+    def W(self) -> float:
+        """The effort W = sum |I-| + |I+| (N m s); NaN when the double support has no solution."""
+        return self.double_support.impulses.W if self.double_support is not None else math.nan
+
+    @property
+    def message(self) -> str:
+        """What failed in the solve, "" when nothing did."""
+        return failure_message(self.step, self.double_support.impulses if self.double_support else None)
+
+    @property
+    def usable(self) -> bool:
+        """Converged, admissible, with a finite effort: a gait whose W counts in a study."""
+        return self.converged and self.admissible and math.isfinite(self.W)
+
+    def warm_start(self) -> tuple[np.ndarray, float] | None:
+        """The guess (qd(0), theta) a neighbouring solve can start from; None after a failure."""
+        return (self.step.qd_a.copy(), self.step.theta) if self.converged else None
+
+    def without_samples(self) -> "Gait":
+        """This gait without its sampled trajectory and integration nodes (what studies keep)."""
+        figures = self.figures.without_samples() if self.figures is not None else None
+        return replace(self, step=replace(self.step, nodes=None), figures=figures)
+
+    def to_dict(self, trajectory: bool = True) -> dict:
+        """Plain JSON-ready dictionary (NaN as null), keys from ``gait_views.FIELDS``."""
+        return to_dict(self, trajectory)
+
+    def to_json(self, trajectory: bool = True) -> str:
+        """JSON text of ``to_dict``."""
+        return to_json(self, trajectory)
+
+    def summary(self) -> str:
+        """A readable multi-line summary (degrees where people expect them)."""
+        return summary(self)

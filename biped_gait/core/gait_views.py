@@ -1,0 +1,185 @@
+"""Views of a ``Gait``: its flat figures as one field list (``FIELDS``), which drives the JSON
+keys, the sweeps' CSV columns and the ROS ``GaitPlan`` message, and the printed summary.
+
+A new figure is added here once (and to ``GaitPlan.msg`` if the message carries it). Values are
+SI with radians; a figure that was not computed (the solve failed before it) is NaN, an empty
+list or 0, and null in JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:  # the views read a Gait; gait.py imports this module
+    from .gait import Gait
+
+NAN = math.nan
+
+
+@dataclass(frozen=True)
+class Field:
+    """One flat figure of a gait: its JSON key, how to read it, and its ``GaitPlan`` field
+    (``msg``; None: not in the message) with the message's fixed array size (``size``) or
+    ``vector`` for a geometry_msgs/Vector3."""
+
+    key: str
+    read: Callable[["Gait"], Any]
+    msg: str | None = None
+    size: int | None = None
+    vector: bool = False
+
+
+def _ds(attr: str, empty: Any = NAN, when: str = "any") -> Callable[["Gait"], Any]:
+    """A double-support figure; ``when='solved'``: only where its impulse problem was solved."""
+
+    def read(gait: "Gait") -> Any:
+        ds = gait.double_support
+        if ds is None or (when == "solved" and not ds.impulses.success):
+            return empty
+        return getattr(ds, attr)
+
+    return read
+
+
+def _impulse(attr: str, empty: Any = ()) -> Callable[["Gait"], Any]:
+    """A part of the impulse solution (``empty`` where it was not solved)."""
+
+    def read(gait: "Gait") -> Any:
+        ds = gait.double_support
+        return getattr(ds.impulses, attr) if ds is not None and ds.impulses.success else empty
+
+    return read
+
+
+def _figure(attr: str, empty: Any = NAN) -> Callable[["Gait"], Any]:
+    return lambda gait: getattr(gait.figures, attr) if gait.figures is not None else empty
+
+
+def _closure_residual(gait: "Gait") -> float:
+    """z_d^T D_e (Xd^a - Xd^b) (kg m^2/s) as the double support saw it (after the slack
+    correction), else the BVP's closure gap."""
+    return gait.double_support.impulses.closure_residual if gait.double_support is not None else gait.step.closure_gap
+
+
+def _trajectory(gait: "Gait") -> dict:
+    figures = gait.figures
+    if figures is None or figures.samples is None:
+        return {}
+    s = figures.samples
+    return {"t": s.t, "q": s.q, "qd": s.qd, "grf": figures.grf, "h_vertical": figures.h_vertical}
+
+
+FIELDS: tuple[Field, ...] = (
+    Field("step_length", lambda g: g.problem.step_length, "step_length"),
+    Field("period", lambda g: g.problem.period, "period"),
+    Field("arm_amplitude", lambda g: g.problem.arm_amplitude, "arm_amplitude"),
+    Field("mode", lambda g: g.problem.mode.value),
+    Field("params", lambda g: g.problem.params, "params"),
+    Field("closure", lambda g: g.problem.closure, "closure"),
+    Field("effort", lambda g: g.problem.effort, "effort"),
+    Field("converged", lambda g: g.converged, "converged"),
+    Field("admissible", lambda g: g.admissible, "admissible"),
+    Field("message", lambda g: g.message),
+    Field("reasons", lambda g: list(g.reasons)),
+    Field("theta", lambda g: g.step.theta, "theta"),
+    Field("slack", _ds("slack", 0.0), "slack"),
+    Field("W", lambda g: g.W, "effort_cost"),
+    Field("I_minus", _impulse("i_minus"), "i_minus", 7),
+    Field("I_plus", _impulse("i_plus"), "i_plus", 7),
+    Field("IR1_minus", _impulse("ir1_minus"), "ir1_minus", vector=True),
+    Field("IR2", _impulse("ir2"), "ir2", vector=True),
+    Field("IR2_plus", _impulse("ir2_plus"), "ir2_plus", vector=True),
+    Field("Xd_minus", _impulse("xd_minus"), "xd_minus", 12),
+    Field("Xd_plus", _impulse("xd_plus"), "xd_plus", 12),
+    Field("Xd_a", _ds("xd_a", []), "xd_a", 12),
+    Field("Xd_b", _ds("xd_b", []), "xd_b", 12),
+    Field("qd_a", lambda g: g.step.qd_a, "qd_a", 9),
+    Field("qd_b", lambda g: g.step.qd_b, "qd_b", 9),
+    Field("q0", lambda g: g.step.q0, "q0", 9),
+    Field("qT", lambda g: g.step.q_target, "q_t", 9),
+    Field("new_stance_foot", _ds("new_stance_foot", [])),
+    Field("min_grf_z", _figure("min_grf_z"), "min_grf_z"),
+    Field("min_swing_height", _figure("min_swing_height"), "min_swing_height"),
+    Field("max_friction_ratio", _figure("max_friction_ratio"), "max_friction_ratio"),
+    Field("q3_range", _figure("q3_range", [])),
+    Field("q5_range", _figure("q5_range", [])),
+    Field("q9_min", _figure("q9_min")),
+    Field("H_Tminus", _ds("h_t_minus", []), "h_t_minus", 2),
+    Field("H_Tplus", _ds("h_t_plus", []), "h_t_plus", 2),
+    Field("swing_tip_vz_before_impact", _ds("swing_tip_vz_before_impact", when="solved")),
+    Field("old_stance_tip_vz_after_impact", _ds("old_stance_tip_vz_after_impact", when="solved")),
+    Field("new_stance_tip_speed_after", _ds("new_stance_tip_speed_after", when="solved")),
+    Field("bvp_iterations", lambda g: g.step.iterations),
+    Field("end_point_residual", lambda g: g.step.end_residual),
+    Field("closure_residual", _closure_residual, "closure_residual"),
+    Field("impact_equation_residual", _impulse("equation_residual", NAN)),
+    Field("lp_duality_gap", _impulse("duality_gap", NAN)),
+    Field("energy_drift", _figure("energy_drift")),
+    Field("dynamics_evaluations", lambda g: g.step.evaluations),
+    Field("solve_time_s", lambda g: g.solve_time_s, "solve_time"),
+    Field("trajectory", _trajectory),
+)
+FIELD_BY_KEY = {f.key: f for f in FIELDS}
+
+
+def clean(value: Any) -> Any:
+    """JSON-ready: arrays and tuples to lists, NaN and infinities to None."""
+    if isinstance(value, np.ndarray):
+        return clean(value.tolist())
+    if isinstance(value, (list, tuple)):
+        return [clean(v) for v in value]
+    if isinstance(value, dict):
+        return {k: clean(v) for k, v in value.items()}
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, np.integer):
+        return int(value)
+    return value
+
+
+def to_dict(gait: "Gait", trajectory: bool = True) -> dict:
+    """The gait's flat figures as a JSON-ready dictionary, in ``FIELDS`` order."""
+    return {f.key: clean(f.read(gait)) for f in FIELDS if trajectory or f.key != "trajectory"}
+
+
+def to_json(gait: "Gait", trajectory: bool = True) -> str:
+    """JSON text of ``to_dict``."""
+    return json.dumps(to_dict(gait, trajectory), indent=1)
+
+
+def summary(gait: "Gait") -> str:
+    """A readable multi-line summary (degrees where people expect them)."""
+    deg = math.degrees
+    d = {f.key: f.read(gait) for f in FIELDS if f.key != "trajectory"}
+    lines = [
+        f"gait  L = {gait.step_length:.3f} m, T = {gait.period:.3f} s, alpha = {deg(gait.arm_amplitude):.2f} deg, "
+        f"{d['mode']}, params {d['params']}, closure {d['closure']}, effort {d['effort']}",
+        f"converged {gait.converged} ({d['bvp_iterations']} Newton iterations), admissible {gait.admissible}",
+    ]
+    lines += [f"  not admissible: {r}" for r in gait.reasons]
+    if gait.converged and math.isfinite(gait.W):
+        fmt = lambda v: "[" + ", ".join(f"{x:8.3f}" for x in v) + "]"  # noqa: E731
+        lines += [
+            f"W = {gait.W:.4f} N m s    theta = {deg(gait.theta):.4f} deg"
+            + (f"    s = {d['slack']:.6f} rad/s" if d["closure"] == "slack" else ""),
+            f"I-  (N m s) {fmt(d['I_minus'])}",
+            f"I+  (N m s) {fmt(d['I_plus'])}",
+            f"I_R1- {fmt(d['IR1_minus'])}  I_R2 {fmt(d['IR2'])}  I_R2+ {fmt(d['IR2_plus'])}  (N s)",
+            f"min vertical GRF {d['min_grf_z']:.2f} N, min swing height {d['min_swing_height'] * 1000:.1f} mm, "
+            f"max friction ratio {d['max_friction_ratio']:.3f}",
+            f"q3 in [{deg(d['q3_range'][0]):.3f}, {deg(d['q3_range'][1]):.3f}] deg, "
+            f"q5 in [{deg(d['q5_range'][0]):.3f}, {deg(d['q5_range'][1]):.3f}] deg",
+            f"yaw angular momentum (kg m^2/s) about old/new stance foot: T- {d['H_Tminus'][0]:.3f}/{d['H_Tminus'][1]:.3f}, "
+            f"T+ {d['H_Tplus'][0]:.3f}/{d['H_Tplus'][1]:.3f}",
+            f"residuals: BVP end {d['end_point_residual']:.1e} rad, closure {d['closure_residual']:.1e} kg m^2/s, "
+            f"impact eqs {d['impact_equation_residual']:.1e}, LP duality {d['lp_duality_gap']:.1e}, "
+            f"energy drift {d['energy_drift']:.1e}",
+        ]
+    lines.append(f"solve time {gait.solve_time_s * 1000:.1f} ms, {d['dynamics_evaluations']} dynamics evaluations")
+    return "\n".join(lines)

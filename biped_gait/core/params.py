@@ -1,0 +1,155 @@
+"""Physical parameters of the seven-link biped: one description, loaded from a YAML file.
+
+Two sets ship with the package (docs/model.md section 1): ``aoustin2013`` (the default, the paper's
+table with the arm's transverse inertia corrected to a uniform rod's) and
+``aoustin2013-table`` (the table verbatim). A user passes either name, or the path of an
+edited copy. Units are SI: m, kg, kg m^2, m/s^2.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+DEFAULT_PARAMS = "aoustin2013"
+LINK_NAMES = ("shin", "thigh", "trunk", "arm")
+GEOMETRY_KEYS = ("hip_half_width", "torso_joint_height", "shoulder_half_width", "shoulder_height")
+
+
+@dataclass(frozen=True)
+class Link:
+    """One rigid link: z axis along the link, pointing up when the biped stands straight.
+
+    ``com_offset`` is the CoM's distance (m) from the link's upper joint (knee for the shin,
+    hip for the thigh, pelvis centre for the trunk, shoulder for the arm); ``inertia`` is
+    (Ixx, Iyy, Izz) about the CoM in the link frame (kg m^2).
+    """
+
+    length: float
+    mass: float
+    com_offset: float
+    inertia: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class BipedParams:
+    """The whole biped: four link types (legs and arms come in identical pairs) and geometry (m)."""
+
+    name: str
+    gravity: float
+    shin: Link
+    thigh: Link
+    trunk: Link
+    arm: Link
+    hip_half_width: float
+    torso_joint_height: float
+    shoulder_half_width: float
+    shoulder_height: float
+
+    @property
+    def leg_length(self) -> float:
+        """l = l_s + l_t (m): hip to foot tip with the knee straight."""
+        return self.shin.length + self.thigh.length
+
+    @property
+    def total_mass(self) -> float:
+        """Mass of the whole biped (kg)."""
+        return 2 * (self.shin.mass + self.thigh.mass + self.arm.mass) + self.trunk.mass
+
+
+def shipped_param_names() -> list[str]:
+    """Names of the parameter sets that ship with the package."""
+    return sorted(p.name[:-5] for p in resources.files("biped_gait.core.data").iterdir() if p.name.endswith(".yaml"))
+
+
+def load_params(name_or_path: str | Path | None = None) -> BipedParams:
+    """Load a shipped parameter set by name, or a YAML file by path (``None``: the default).
+
+    Raises ``ValueError`` with a one-line message for an unknown name, an unreadable file, or
+    missing or non-physical values.
+    """
+    key = DEFAULT_PARAMS if name_or_path in (None, "") else str(name_or_path)
+    if key in shipped_param_names():
+        text = resources.files("biped_gait.core.data").joinpath(f"{key}.yaml").read_text()
+        source = key
+    elif Path(key).is_file():
+        text = Path(key).read_text()
+        source = key
+    else:
+        raise ValueError(
+            f"unknown parameter set {key!r}: give one of {', '.join(shipped_param_names())} or a YAML file path"
+        )
+    try:
+        raw = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ValueError(f"parameter file {source}: not valid YAML ({exc.__class__.__name__})") from None
+    return params_from_dict(raw, source)
+
+
+def params_from_dict(raw: object, source: str = "<dict>") -> BipedParams:
+    """Build and validate ``BipedParams`` from the structure of a parameter file."""
+    if not isinstance(raw, dict):
+        raise ValueError(f"parameter file {source}: expected a mapping at the top level")
+    links_raw = _require(raw, "links", source)
+    geometry = _require(raw, "geometry", source)
+    if not isinstance(links_raw, dict) or not isinstance(geometry, dict):
+        raise ValueError(f"parameter file {source}: 'links' and 'geometry' must be mappings")
+    links = {name: _link(_require(links_raw, name, source, "links."), f"{source}: links.{name}") for name in LINK_NAMES}
+    geo = {k: _number(_require(geometry, k, source, "geometry."), f"{source}: geometry.{k}") for k in GEOMETRY_KEYS}
+    for k in ("hip_half_width", "shoulder_half_width"):
+        if geo[k] <= 0:
+            raise ValueError(f"parameter file {source}: geometry.{k} must be positive, got {geo[k]}")
+    gravity = _number(raw.get("gravity", 9.81), f"{source}: gravity")
+    if gravity <= 0:
+        raise ValueError(f"parameter file {source}: gravity must be positive, got {gravity}")
+    return BipedParams(name=str(raw.get("name", Path(source).stem)), gravity=gravity, **links, **geo)
+
+
+def _require(mapping: dict, key: str, source: str, prefix: str = "") -> object:
+    if key not in mapping:
+        raise ValueError(f"parameter file {source}: missing value {prefix}{key}")
+    return mapping[key]
+
+
+def _number(value: object, what: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"parameter file {what} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"parameter file {what} must be finite, got {value}")
+    return float(value)
+
+
+def _link(raw: object, what: str) -> Link:
+    if not isinstance(raw, dict):
+        raise ValueError(f"parameter file {what} must be a mapping")
+    for key in ("length", "mass", "com_offset", "inertia"):
+        if key not in raw:
+            raise ValueError(f"parameter file {what}: missing value {key}")
+    length = _number(raw["length"], f"{what}.length")
+    mass = _number(raw["mass"], f"{what}.mass")
+    com = _number(raw["com_offset"], f"{what}.com_offset")
+    inertia_raw = raw["inertia"]
+    if not isinstance(inertia_raw, (list, tuple)) or len(inertia_raw) != 3:
+        raise ValueError(f"parameter file {what}.inertia must be a list [Ixx, Iyy, Izz]")
+    ixx, iyy, izz = (_number(v, f"{what}.inertia") for v in inertia_raw)
+    if length <= 0:
+        raise ValueError(f"parameter file {what}.length must be positive, got {length}")
+    if mass <= 0:
+        raise ValueError(f"parameter file {what}.mass must be positive, got {mass}")
+    if not 0 <= com <= length:
+        raise ValueError(f"parameter file {what}.com_offset must lie in [0, length={length}], got {com}")
+    # A rigid body's principal moments are non-negative and obey the triangle inequality;
+    # zero about a limb's long axis (the paper's thin rods) is the admissible limit.
+    tol = 1e-12
+    if min(ixx, iyy, izz) < 0 or ixx + iyy < izz - tol or iyy + izz < ixx - tol or izz + ixx < iyy - tol:
+        raise ValueError(
+            f"parameter file {what}.inertia {[ixx, iyy, izz]} is not physical: it must be positive "
+            "semi-definite and satisfy the triangle inequality"
+        )
+    if ixx + iyy + izz <= 0:
+        raise ValueError(f"parameter file {what}.inertia must not be all zero")
+    return Link(length=length, mass=mass, com_offset=com, inertia=(ixx, iyy, izz))

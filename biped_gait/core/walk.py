@@ -1,0 +1,372 @@
+"""Walking a planned gait step after step: a plan in, samples and events out (the core of the
+simulator node; docs/model.md section 8).
+
+Each step integrates the ballistic dynamics from the actual state (the hybrid step's flow, one
+RK8 step of the walk's grid at a time), detects the swing foot's touchdown with the hybrid
+step's guard (located on the quintic Hermite interpolant and landed on by an exact RK8 step),
+applies the double support with impulses recomputed by the LP from the actual pre-impact state,
+and exchanges the legs (the reset).
+
+Off the planned orbit the plan's post-impact velocity is not exactly reachable: the angular
+momentum about the foot-to-foot line is conserved through the double support. Aiming at the
+nearest reachable velocity (the plan's plus s z_d, z_d the locked rotation) is not enough to
+walk: the ballistic gait is open-loop unstable (a touchdown error grows about 150-fold per
+step), so by default (``reaim=True``) the walker re-aims each step. It re-solves the next
+step's boundary-value problem from the actual configuration after the leg exchange to the
+planned touchdown configuration, with the next step's DURATION as the free tenth unknown (the
+one quantity the impulses cannot set, that momentum, is regulated by how long gravity acts on
+it), under the current impact's momentum closure, so that the target is exactly reachable and
+the next touchdown lands on the plan. It reports |s| for the plan's own velocity as the miss,
+and how far the re-aimed velocity is from the plan's.
+
+Everything is in the model's coordinates (stance leg 1 on the right); ``stance_side`` says
+which physical foot that is, and ``stance_foot`` where it is in the world (m). Units SI, rad.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from pinocchio import forwardKinematics
+
+from . import newton
+from .configurations import GaitMode
+from .flow import hermite_samples
+from .hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
+from .impulses import solve_impulses
+from .model import BipedModel
+from .params import load_params
+from .reports import ground_reaction_inverse_dynamics
+from .settings import DEFAULTS, Settings
+from .world import WorldState, WorldView
+
+
+@dataclass(frozen=True)
+class PlannedOrbit:
+    """What a walk needs of a plan: the parameter set (name or file), the gait's L (m), T (s),
+    alpha (rad), mode, effort, the boundary configurations q0 and q_t (rad), the velocities
+    qd_a at the start and qd_b at the end of the step (rad/s), and the plan's verdict."""
+
+    params: str
+    step_length: float
+    period: float
+    arm_amplitude: float
+    mode: GaitMode
+    effort: str
+    q0: np.ndarray
+    q_t: np.ndarray
+    qd_a: np.ndarray
+    qd_b: np.ndarray
+    converged: bool = True
+    admissible: bool = True
+    reasons: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, gait) -> "PlannedOrbit":
+        """The orbit of a solved ``gait.Gait``."""
+        return cls(gait.problem.params, gait.step_length, gait.period, gait.arm_amplitude, gait.mode,
+                   gait.problem.effort, gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b,
+                   gait.converged, gait.admissible, gait.reasons)
+
+
+class Fall(Exception):
+    """The robot fell, or its next step cannot be made: the message says why."""
+
+
+@dataclass(frozen=True)
+class Sample:
+    """The state at one publishing instant: time in the walk (s) and in the step, q, qd, the
+    ground reaction [Fx, Fy, Fz, Mz] at the stance tip (N, N m), the step, its stance side and
+    stance foot (m, world), and the robot in world terms (``Walk`` fills it)."""
+
+    t: float
+    t_step: float
+    q: np.ndarray
+    qd: np.ndarray
+    grf: np.ndarray
+    step: int = 0
+    stance_side: str = "right"
+    stance_foot: np.ndarray | None = None
+    world: WorldState | None = None
+
+
+@dataclass(frozen=True)
+class Touchdown:
+    """The end of one step: when, the double support applied, and the distance to the plan."""
+
+    step: int
+    t: float  # time in the walk (s)
+    t_step: float  # duration of the step (s)
+    i_minus: np.ndarray
+    i_plus: np.ndarray
+    W: float
+    state_error: float  # max |(q, qd) at touchdown - the plan's (q_T, qd_b)| (rad, rad/s)
+    velocity_miss: float  # |s|: how far the plan's post-impact velocity is from reachable (rad/s)
+    correction: float  # max |re-aimed post-impact velocity - the plan's| (rad/s), 0 without re-aiming
+    equation_residual: float
+    next_stance_side: str = ""
+
+
+@dataclass(frozen=True)
+class Fell:
+    """The walk ended with a fall in ``step``: at ``t`` (s in the walk), ``time_in_step`` (s)."""
+
+    step: int
+    t: float
+    time_in_step: float
+    stance_side: str
+    reason: str
+
+
+@dataclass(frozen=True)
+class Finished:
+    """The walk made all its steps: ``steps`` done by ``t`` (s); the next stance side."""
+
+    steps: int
+    t: float
+    stance_side: str
+
+
+@dataclass(frozen=True)
+class CouldNotStart:
+    """The plan cannot be walked (not converged, unknown parameters): the reason."""
+
+    reason: str
+
+
+@dataclass(frozen=True)
+class StepOutcome:
+    """One step: its samples, and its touchdown or the reason the robot fell."""
+
+    samples: list[Sample]
+    touchdown: Touchdown | None
+    fall: str = ""
+
+
+@dataclass(frozen=True)
+class WalkState:
+    """Where the walker is: the model state at the start of the current step, which physical
+    foot is the stance foot, and that foot's world position (m)."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    step: int = 0
+    t: float = 0.0
+    stance_side: str = "right"
+    stance_foot: np.ndarray = field(default_factory=lambda: np.array([0.0, -0.2, 0.0]))
+
+
+class Walker:
+    """Walks the gait of ``orbit`` with the dynamics of ``hybrid`` one step per ``walk_step``."""
+
+    def __init__(self, hybrid: HybridStep, orbit: PlannedOrbit, rate: float, reaim: bool = True,
+                 settings: Settings = DEFAULTS) -> None:
+        """``rate``: samples per second of simulated time; ``reaim``: re-solve each step's BVP
+        from the actual state (else aim at the plan's velocity); ``settings.walk_steps``: RK8
+        steps per period T."""
+        if not orbit.converged:
+            raise ValueError("cannot walk a plan that did not converge")
+        if not rate > 0:
+            raise ValueError(f"publishing rate must be positive, got {rate}")
+        self.hybrid, self.bm, self.orbit, self.rate = hybrid, hybrid.bm, orbit, rate
+        self.settings = settings
+        self.period = orbit.period
+        self.grid = settings.walk_steps
+        self.flow = hybrid.flow(1)  # one RK8 step per call: the walker owns the grid
+        self.step_flow = hybrid.flow(self.grid)
+        self.guard = hybrid.guard(0.5 * orbit.period)
+        self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
+        self.state = WalkState(np.array(orbit.q0), np.array(orbit.qd_a),
+                               stance_foot=np.array([0.0, -self.bm.params.hip_half_width, 0.0]))
+        self.reaim = reaim
+        self.sample_index = 0  # the next sample is at sample_index / rate in the walk (s)
+        self.next_period = orbit.period
+        if reaim:
+            # d q(T) / d qd(0) on the planned orbit: the chord Jacobian of every re-aim.
+            seeds = np.vstack([np.zeros((9, 9)), np.eye(9)])
+            self._phi_qv = self.step_flow.propagate(self.state.q, self.qd_a, self.period, seeds).sens[:9]
+
+    def shove(self, delta_qd: np.ndarray) -> None:
+        """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current step starts with."""
+        self.state = replace(self.state, qd=self.state.qd + np.asarray(delta_qd, float))
+
+    def _lowest_link(self, q: np.ndarray) -> float:
+        """Height (m) of the lowest joint or hand other than the two feet."""
+        model, data = self.bm.single, self.bm.single_data
+        forwardKinematics(model, data, q)
+        heights = [data.oMi[j].translation[2] for j in range(3, model.njoints)]  # knee and above
+        arm = self.bm.params.arm.length
+        for name in ("stance_side_shoulder", "swing_side_shoulder"):
+            heights.append(data.oMi[model.getJointId(name)].act(np.array([0.0, 0.0, -arm]))[2])
+        return float(min(heights))
+
+    def walk_step(self) -> StepOutcome:
+        """Integrate the current step until touchdown (or a fall) and apply the double support."""
+        s = self.state
+        h = self.period / self.grid
+        t_step, q, qd = 0.0, s.q, s.qd
+        samples: list[Sample] = []
+        limit = 2.0 * self.period
+        while t_step < limit:
+            run = self.flow.propagate(q, qd, h, keep_nodes=True)
+            nodes = (run.nodes[0] + t_step, *run.nodes[1:])
+            landed = self.guard.crossed(t_step + h, run.q)
+            t_end = t_step + h
+            if landed:
+                t_end = self.guard.locate(nodes)
+            # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
+            # touchdown instant itself opens the next step (post-impact state).
+            taus = []
+            while (tau := (self.sample_index + len(taus)) / self.rate - s.t) < t_end - 1e-12 or (
+                not landed and tau <= t_end
+            ):
+                taus.append(tau)
+            if taus:
+                sq, sqd = hermite_samples(nodes, np.array(taus))
+                for tau, q_s, qd_s in zip(taus, sq, sqd):
+                    sample = self._sample(s.t + tau, tau, q_s, qd_s)
+                    samples.append(sample)
+                    self.sample_index += 1
+                    fall = self._fall(sample)
+                    if fall:
+                        return StepOutcome(samples, None, fall)
+            if landed:
+                end = self.flow.propagate(q, qd, t_end - t_step)
+                try:
+                    return StepOutcome(samples, self._double_support(end.q, end.qd, t_end))
+                except Fall as fall:
+                    return StepOutcome(samples, None, str(fall))
+            t_step, q, qd = t_end, run.q, run.qd
+        return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
+
+    def _sample(self, t: float, t_step: float, q: np.ndarray, qd: np.ndarray) -> Sample:
+        s = self.state
+        qdd = self.flow.acceleration(q, qd)
+        return Sample(t, t_step, q, qd, ground_reaction_inverse_dynamics(self.bm, q, qd, qdd), s.step,
+                      s.stance_side, s.stance_foot)
+
+    def _fall(self, sample: Sample) -> str:
+        if not sample.grf[2] > 0.0:
+            return f"vertical ground reaction not positive ({sample.grf[2]:.3g} N) at t = {sample.t:.4f} s"
+        if sample.t_step > 0.05 * self.period and self._lowest_link(sample.q) < 0.0:
+            return f"a link went below the ground at t = {sample.t:.4f} s"
+        return ""
+
+    def _double_support(self, q_td: np.ndarray, qd_td: np.ndarray, t_step: float) -> Touchdown:
+        """Impulses from the actual pre-impact state towards the plan, then the leg exchange."""
+        bm, s = self.bm, self.state
+        impact = self.hybrid.impact(q_td)
+        planned = impact.problem(qd_td, self.qd_a)
+        reachable, miss = planned.reachable()
+        if self.reaim:
+            qd_next = self._reaim(exchange(q_td), impact, planned.xd_b)
+            problem = replace(planned, xd_a=impact.next_step_velocity(qd_next))
+        else:
+            problem = reachable
+        xd_a = problem.xd_a
+        if not np.all(np.isfinite(xd_a)):
+            raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
+        sol = solve_impulses(problem, self.orbit.effort)
+        if not sol.success:
+            raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
+        error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
+        # The new stance foot's world position, then the mirror: the next step in model coordinates.
+        tip = bm.swing_tip(q_td)
+        new_foot = s.stance_foot + mirror_for(s.stance_side) @ tip
+        new_foot[2] = 0.0
+        self.state = WalkState(
+            q=exchange(q_td),
+            qd=exchange(xd_a[3:]),
+            step=s.step + 1,
+            t=s.t + t_step,
+            stance_side=other_side(s.stance_side),
+            stance_foot=new_foot,
+        )
+        return Touchdown(
+            step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
+            W=sol.W, state_error=error, velocity_miss=abs(miss),
+            correction=float(np.max(np.abs(xd_a[3:] - planned.xd_a[3:]))), equation_residual=sol.equation_residual,
+            next_stance_side=self.state.stance_side,
+        )
+
+    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray) -> np.ndarray:
+        """The next step's initial velocity (its own coordinates, rad/s), and its duration
+        (``next_period``, s): the flow from ``q_start`` reaches the planned touchdown
+        configuration q_T exactly, and the velocity is reachable through this double support
+        (the momentum about the feet line is kept).
+
+        Chord steps with the planned orbit's Jacobian: off the orbit by a numerical error
+        only, they converge to rounding level in one or two steps.
+        """
+        gain, _ = impact.closure_gradients()  # d(momentum after)/d(qd_next)
+        target_momentum = float(impact.momentum_row @ xd_b)
+        jac = np.zeros((10, 10))
+        jac[:9, :9], jac[:9, 9], jac[9, :9] = self._phi_qv, self.qd_b, gain
+
+        def residual(x: np.ndarray):
+            v, duration = x[:9], x[9]
+            if not duration > 0:
+                return np.full(10, np.nan), None
+            with np.errstate(over="ignore", invalid="ignore"):
+                run = self.step_flow.propagate(q_start, v, duration)
+            return np.append(run.q - self.q_t, gain @ v - target_momentum), None
+
+        x0 = np.append(self.qd_a, self.next_period)
+        result = newton.chord(residual, x0, jac, 1e-12, self.settings.reaim_steps)
+        if result.status == newton.DIVERGED:
+            raise Fall("re-aiming the next step diverged: the state is too far from the plan")
+        if not result.converged:
+            raise Fall("re-aiming the next step did not converge: the state is too far from the plan")
+        self.next_period = float(result.x[9])
+        return result.x[:9]
+
+
+class Walk:
+    """A plan in, an iterator of samples and events out.
+
+    Iterating yields, in time order: ``Sample`` (every 1 / ``rate`` s of simulated time, with
+    the robot in world terms), ``Touchdown`` at the end of each step, and at the end one of
+    ``Finished`` (``steps`` steps made; 0 means never), ``Fell``, or ``CouldNotStart`` (then
+    nothing else). ``model`` and ``world`` (None if it could not start) describe the robot.
+    """
+
+    def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,
+                 settings: Settings = DEFAULTS) -> None:
+        if not rate > 0:
+            raise ValueError(f"publishing rate must be positive, got {rate}")
+        if steps < 0:
+            raise ValueError(f"steps must be 0 (no end) or positive, got {steps}")
+        self.orbit, self.rate, self.steps = orbit, rate, steps
+        self.problem = ""
+        self.model: BipedModel | None = None
+        self.world: WorldView | None = None
+        self.walker: Walker | None = None
+        if not orbit.converged:
+            self.problem = "the plan did not converge"
+            return
+        try:
+            self.model = BipedModel.from_params(load_params(orbit.params or None))
+        except ValueError as exc:
+            self.problem = str(exc)
+            return
+        self.world = WorldView(self.model)
+        self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings)
+
+    def __iter__(self) -> Iterator[Sample | Touchdown | Fell | Finished | CouldNotStart]:
+        if self.walker is None:
+            yield CouldNotStart(self.problem)
+            return
+        walker, world = self.walker, self.world
+        while self.steps == 0 or walker.state.step < self.steps:
+            s = walker.state
+            outcome = walker.walk_step()
+            for sample in outcome.samples:
+                yield replace(sample, world=world.state(sample.q, sample.qd, s.stance_side, s.stance_foot))
+            if outcome.touchdown is None:
+                t = outcome.samples[-1].t if outcome.samples else s.t
+                yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)
+                return
+            yield outcome.touchdown
+        yield Finished(walker.state.step, walker.state.t, walker.state.stance_side)

@@ -1,0 +1,54 @@
+"""A client side for scripts, tests and benchmarks: an rclpy context, node and executor of its
+own in the calling process, with helpers to wait, connect to a service and call it.
+
+Waits spin the executor with ``spin_once`` in a loop (faster than
+``spin_until_future_complete`` for a client, and never stuck on a signal).
+"""
+
+from __future__ import annotations
+
+import time
+
+from . import environment  # noqa: F401  (before rclpy: keep discovery local)
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+
+
+class ClientSide:
+    """An rclpy context, a node named ``name`` and a single-threaded executor of their own."""
+
+    def __init__(self, name: str) -> None:
+        self.context = Context()
+        rclpy.init(context=self.context)
+        self.node = rclpy.create_node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def wait(self, done, timeout: float = 30.0) -> None:
+        """Spin until ``done()`` is true; ``TimeoutError`` after ``timeout`` s."""
+        deadline = time.monotonic() + timeout
+        while not done():
+            if time.monotonic() > deadline:
+                raise TimeoutError(f"timed out after {timeout:g} s")
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def connect(self, client, timeout: float = 30.0) -> None:
+        """Wait for a service, then let discovery finish the server's side: a response sent
+        before the server has matched this client's reader is lost (a DDS race)."""
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise TimeoutError(f"service {client.srv_name} did not appear in {timeout:g} s")
+        settle = time.monotonic() + 1.0
+        self.wait(lambda: time.monotonic() > settle, 5.0)
+
+    def call(self, client, request, timeout: float = 30.0):
+        """Call a service and return its response (spinning this side's executor)."""
+        future = client.call_async(request)
+        self.wait(future.done, timeout)
+        return future.result()
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        rclpy.try_shutdown(context=self.context)

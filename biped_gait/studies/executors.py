@@ -1,0 +1,77 @@
+"""Where studies run: local worker processes (default) or a Dask distributed cluster, behind
+the ``concurrent.futures.Executor`` interface, and the one planner each worker thread keeps.
+
+Work is sent as plain picklable arguments (``BipedParams``, floats, strings); each worker
+thread builds a ``GaitPlanner`` for a parameter set the first time it sees it and reuses it
+(Pinocchio data are not thread-safe, so never shared between threads).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+from collections.abc import Iterator
+from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import contextmanager
+
+from ..core.planner import GaitPlanner
+from ..core.params import BipedParams
+
+_local = threading.local()
+
+
+def planner_for(params: BipedParams) -> GaitPlanner:
+    """This thread's planner for ``params`` (built on first use, then reused)."""
+    planners = getattr(_local, "planners", None)
+    if planners is None:
+        planners = _local.planners = {}
+    if params not in planners:
+        planners[params] = GaitPlanner(params)
+    return planners[params]
+
+
+def _ignore_sigint() -> None:
+    """Worker initializer: Ctrl-C is the parent's to handle (it keeps what is computed)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def check_workers(workers: int | None) -> int:
+    """Number of local worker processes: ``None`` means one per core; raises ``ValueError``
+    for a count below one."""
+    if workers is None:
+        return os.cpu_count() or 1
+    if workers < 1:
+        raise ValueError(f"the number of workers must be at least 1, got {workers}")
+    return workers
+
+
+@contextmanager
+def open_executor(workers: int | None = None, scheduler: str | None = None) -> Iterator[Executor]:
+    """An executor for studies: ``scheduler`` (a Dask scheduler address such as
+    ``tcp://127.0.0.1:8786``) runs the work on that cluster, otherwise ``workers`` local
+    processes (default: one per core) do.
+
+    On leaving, work not yet started is cancelled; local processes finish the task they hold.
+    Raises ``ValueError`` if the scheduler cannot be reached (within Dask's configured
+    ``distributed.comm.timeouts.connect``, 30 s by default) or ``workers`` is below one.
+    """
+    if scheduler:
+        from distributed import Client  # imported only when a cluster is asked for
+
+        try:
+            client = Client(scheduler)  # connect timeout: Dask's distributed.comm.timeouts.connect
+        except (OSError, TimeoutError) as exc:
+            raise ValueError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+        executor = client.get_executor(pure=False)
+        try:
+            yield executor
+        finally:
+            executor.shutdown(wait=False)
+            client.close()
+    else:
+        pool = ProcessPoolExecutor(max_workers=check_workers(workers), initializer=_ignore_sigint)
+        try:
+            yield pool
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
