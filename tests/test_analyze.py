@@ -4,6 +4,10 @@ reader (rosbags) finds in the files, the plots are PNG images, bad input exits w
 
 from __future__ import annotations
 
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
 import json
 import math
 import shutil
@@ -11,7 +15,6 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pytest
 import yaml
 
 from biped_gait.analysis.cli import main
@@ -20,6 +23,8 @@ from biped_gait_interfaces.srv import PlanGait
 
 from .ros_helpers import read_bag  # rosbags: reads the files independently
 from .walk_recording import own_planner, record_walk
+
+pytestmark = pytest.mark.ros
 
 PLANNER = "analyze_test_planner"
 STEPS = 3

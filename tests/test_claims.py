@@ -1,4 +1,4 @@
-"""The paper's claims (spec section 7), computed on a coarse grid with the default parameter
+"""The paper's claims (docs/model.md section 7), computed on a coarse grid with the default parameter
 set and asserted; nothing here is a stored number, and a claim that stops holding fails.
 
 At T = 0.45 s and L = 0.40, 0.45, 0.50 m, the normal gait's W(alpha) is bracketed on a 5 deg
@@ -22,6 +22,8 @@ from biped_gait.core.settings import DEFAULTS
 from biped_gait.studies.optimize import ALPHA_RANGE, compare_modes
 from biped_gait.core.params import load_params
 from biped_gait.studies.results_page import momentum_jump
+
+pytestmark = pytest.mark.studies
 
 STEP_LENGTHS = (0.40, 0.45, 0.50)  # m
 PERIOD = 0.45  # s

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.core
+
 ENTRY = shutil.which("biped-gait", path=str(Path(sys.executable).parent))
 
 

@@ -11,6 +11,8 @@ import pytest
 
 from .test_cli import ENTRY, run
 
+pytestmark = pytest.mark.studies
+
 distributed = pytest.importorskip("distributed")
 
 # Volatile figures: wall time of each solve.

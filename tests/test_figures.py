@@ -13,6 +13,8 @@ from biped_gait.studies.sweep import solve_chain
 
 from .conftest import DEFAULT_REQUEST
 
+pytestmark = pytest.mark.studies
+
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 

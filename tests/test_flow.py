@@ -11,6 +11,8 @@ from scipy.integrate import solve_ivp
 from biped_gait.core import reports
 from biped_gait.core.flow import BallisticFlow, hermite_samples
 
+pytestmark = pytest.mark.core
+
 
 def test_energy_is_conserved_along_the_step(planner, default_gait):
     run = planner.flow.propagate(np.array(default_gait.step.q0), np.array(default_gait.qd_a), default_gait.period, keep_nodes=True)

@@ -21,6 +21,8 @@ from biped_gait.core.reports import ground_reaction_inverse_dynamics, ground_rea
 
 from .conftest import DEFAULT_REQUEST, impact_problem
 
+pytestmark = pytest.mark.core
+
 
 def test_default_gait_is_converged_admissible_and_human_like(default_gait):
     g = default_gait
@@ -41,7 +43,7 @@ def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
     a, b = problem.equations()
     sol = solve_impulses(problem, "l1")
     assert np.max(np.abs(a @ sol.x - b)) < 1e-9
-    assert np.linalg.matrix_rank(a, tol=1e-8) == 41  # the rank deficiency of spec section 4
+    assert np.linalg.matrix_rank(a, tol=1e-8) == 41  # the rank deficiency of docs/model.md section 4
     assert abs(problem.left_null_vector() @ b) < 1e-9
     j1, j2 = problem.j1, problem.j2
     assert np.abs(j1 @ sol.xd_minus).max() < 1e-9  # old stance tip still at rest before the impact

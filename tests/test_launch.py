@@ -3,6 +3,10 @@ itself, and Ctrl-C forwarded to both with their recordings finalized."""
 
 from __future__ import annotations
 
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
 import shutil
 import signal
 import subprocess
@@ -13,6 +17,8 @@ from pathlib import Path
 import yaml
 
 from biped_gait.recording.recover import is_complete
+
+pytestmark = pytest.mark.ros
 
 LAUNCH = shutil.which("biped-gait-launch", path=str(Path(sys.executable).parent))
 

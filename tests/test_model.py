@@ -15,6 +15,8 @@ from biped_gait.core.model import BipedModel
 from biped_gait.core.params import load_params
 from biped_gait.core.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
 
+pytestmark = pytest.mark.core
+
 
 
 @pytest.fixture(scope="module")

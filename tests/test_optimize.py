@@ -18,6 +18,8 @@ from biped_gait.studies.optimize import (
 )
 from biped_gait.core.params import load_params
 
+pytestmark = pytest.mark.studies
+
 COARSE = math.radians(5.0)  # rad: a coarse bracket keeps these tests fast
 
 

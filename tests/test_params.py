@@ -10,6 +10,8 @@ import yaml
 from biped_gait.core.model import BipedModel
 from biped_gait.core.params import load_params, shipped_param_names
 
+pytestmark = pytest.mark.core
+
 
 @pytest.mark.parametrize("name", ["aoustin2013", "aoustin2013-table"])
 def test_total_mass_is_the_tables(name):

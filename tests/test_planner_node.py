@@ -4,13 +4,16 @@ and the MCAP recording read back by independent readers."""
 
 from __future__ import annotations
 
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
 import math
 import signal
 import time
 from pathlib import Path
 
 import numpy as np
-import pytest
 from mcap_ros2.reader import read_ros2_messages
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
@@ -21,6 +24,8 @@ from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
 from .ros_helpers import start_node, stop_node
+
+pytestmark = pytest.mark.ros
 
 SERVICE = "/biped_gait_planner/plan_gait"
 TOPIC = "/biped_gait_planner/gait_plan"

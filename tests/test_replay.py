@@ -7,6 +7,10 @@ while the test's own replay runs."""
 
 from __future__ import annotations
 
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
 import signal
 import subprocess
 import sys
@@ -14,7 +18,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import pytest
 from mcap.reader import make_reader
 from mcap.writer import Writer
 from mcap_ros2.reader import read_ros2_messages
@@ -30,6 +33,8 @@ from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
 from .walk_recording import own_planner, record_walk
+
+pytestmark = pytest.mark.ros
 
 PLANNER = "replay_test_planner"
 REPLAY = str(Path(sys.executable).parent / "biped-gait-replay")

@@ -4,13 +4,16 @@ independent readers), SIGTERM and SIGKILL during a recording, and a fall reporte
 
 from __future__ import annotations
 
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
 import signal
 import subprocess
 import time
 from pathlib import Path
 
 import numpy as np
-import pytest
 from mcap_ros2.reader import read_ros2_messages
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
@@ -22,6 +25,8 @@ from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
 from .ros_helpers import read_bag, start_node, stop_node
+
+pytestmark = pytest.mark.ros
 
 PLANNER = "sim_test_planner"
 

@@ -15,6 +15,8 @@ import pytest
 
 from .test_cli import ENTRY, run
 
+pytestmark = pytest.mark.studies
+
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 

@@ -26,6 +26,8 @@ from biped_gait.studies.sweep_output import SweepFiles, csv_columns
 
 from .conftest import DEFAULT_REQUEST
 
+pytestmark = pytest.mark.studies
+
 PARAMS = load_params()
 
 

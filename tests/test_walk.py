@@ -10,6 +10,8 @@ import pytest
 
 from biped_gait.core.walk import PlannedOrbit, Walker
 
+pytestmark = pytest.mark.core
+
 
 def walk(walker: Walker, steps: int):
     outcomes = []

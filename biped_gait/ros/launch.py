@@ -101,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
         if not new:
             print("biped-gait-launch: error: the simulator left no new recording to analyse", file=sys.stderr)
             return 1
-        from ..analyze import main as analyze
+        from ..analysis.cli import main as analyze
 
         return analyze([str(new[-1])])
     return 0

@@ -1,4 +1,4 @@
-"""``docs/results.md``: the arm-swing study against the paper's numbers (spec section 7) for
+"""``docs/results.md``: the arm-swing study against the paper's numbers (docs/model.md section 7) for
 the default parameter set and the paper's table verbatim, with its figures, the paper's
 claims checked on the computed numbers, and where the project and the paper differ,
 written from the computed evidence.
@@ -93,7 +93,7 @@ def _list(values: Sequence[float], fmt: str) -> str:
 
 
 def paper_claims(study: Study) -> list[Claim]:
-    """The shape of the paper's results (spec section 7), checked on ``study``'s numbers."""
+    """The shape of the paper's results (docs/model.md section 7), checked on ``study``'s numbers."""
     optima = study.fig4_optima()
     lengths = _list([o.gait.step_length for o in optima], "g")
     alphas = [math.degrees(o.alpha) for o in optima]
@@ -191,10 +191,11 @@ def _effort_scale(optima: Sequence[ArmOptimum]) -> str:
     return (
         f"- **The absolute effort differs by a factor {min(ratios):.2f} to {max(ratios):.2f}.** The paper's W against "
         f"the project's at the optimum, T = {PAPER_PERIOD:g} s (N m s): {pairs}. The paper leaves its double-support "
-        "configurations to a figure that is not in its text, so the spec fixes them (straight legs, feet 0.40 m apart, "
-        "no torso yaw, the pelvis at pitch theta at both double supports); with other configurations the impulses "
-        "differ, and the paper's absolute W is not reproducible from what it states. The spec asks for the shape of "
-        "the results, not these numbers. W sums impulses of joint torques, so its unit is N m s (the paper writes N m)."
+        "configurations to a figure that is not in its text, so this project fixes them (docs/model.md section 3: "
+        "straight legs, feet 0.40 m apart, no torso yaw, the pelvis at pitch theta at both double supports); with "
+        "other configurations the impulses differ, and the paper's absolute W is not reproducible from what it "
+        "states. What must reproduce is the shape of the results (docs/model.md section 7), not these numbers. "
+        "W sums impulses of joint torques, so its unit is N m s (the paper writes N m)."
     )
 
 
@@ -202,8 +203,8 @@ def _closure(reference: Reference, optima: Sequence[ArmOptimum]) -> str:
     slack, theta = reference.normal_slack, reference.normal
     ratio = min(PAPER_EFFORT[o.gait.step_length][1] / o.W for o in optima)
     return (
-        "- **The cycle closure is not the cause.** The paper's linear program is infeasible as it states it (spec "
-        "section 4), so the project solves the trunk pitch theta for an exact cycle (theta = "
+        "- **The cycle closure is not the cause.** The paper's linear program is infeasible as it states it "
+        "(docs/model.md section 4), so the project solves the trunk pitch theta for an exact cycle (theta = "
         f"{math.degrees(theta.theta):.3f} deg at L = T = 0.45, alpha = {PAPER_ALPHA_DEG} deg). With the "
         f"paper-comparison closure instead (theta = 0 and a velocity correction s = {slack.double_support.slack:.2e} rad/s), "
         f"W = {slack.W:.3f} against {theta.W:.3f} N m s: a change of {100 * abs(slack.W / theta.W - 1):.2f} %, "
@@ -251,7 +252,7 @@ def _table_inertia(default: Study, table: Study) -> str:
         + f". With the default set's uniform-rod arm ({default.params.arm.inertia[0]:g} kg m^2) the optima are at "
         f"{_list([math.degrees(o.alpha) for o in default.fig4_optima()], '.2f')} deg "
         f"({sum(o.interior for o in default.fig4_optima())} of {len(default.fig4_optima())} interior), which is why "
-        "the default set corrects the table (spec section 1)."
+        "the default set corrects the table (docs/model.md section 1)."
     )
 
 
@@ -268,7 +269,7 @@ def _momentum_at_paper_point(reference: Reference) -> str:
         f"{pairs}. The anti-normal gait's momentum is larger in magnitude at both instants in the paper, and "
         + ("in the project too" if larger else "not at both in the project")
         + "; the magnitudes differ for the same reason as W (the boundary configurations). Signs are those of a "
-        "right stance foot (spec section 6)."
+        "right stance foot (docs/model.md section 6)."
     )
 
 
@@ -327,7 +328,7 @@ def render(
         "support) about the old stance foot, at T+ (after it) about the new stance foot, as the paper reports them. "
         "The **jump** is |H(T+) - H(T-)|, both about the new stance foot: what the double support changes on one "
         "fixed axis. The stance foot of the computed step is the right one; the next step is its mirror image. "
-        "Paper: Aoustin and Formal'skii, numbers from spec section 7 (T = 0.45 s only).",
+        "Paper: Aoustin and Formal'skii, numbers from docs/model.md section 7 (T = 0.45 s only).",
         "",
         "## Figures",
         "",

@@ -1,0 +1,87 @@
+"""ROS messages <-> core objects, without a middleware: the GaitPlan message carries every
+figure of the core's field list, a walk's orbit survives the message, failures become NaN,
+and the constants the offline readers use agree with the generated interfaces."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
+from biped_gait_interfaces.msg import GaitEvent, GaitPlan  # noqa: E402
+from biped_gait_interfaces.srv import PlanGait  # noqa: E402
+from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
+
+from biped_gait.core.configurations import GaitMode  # noqa: E402
+from biped_gait.core.gait_views import FIELDS  # noqa: E402
+from biped_gait.core.planner import GaitRequest  # noqa: E402
+from biped_gait.core.walk import PlannedOrbit  # noqa: E402
+from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
+from biped_gait.ros.conversions import mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key  # noqa: E402
+
+pytestmark = pytest.mark.ros
+
+
+def _as_list(value) -> list:
+    if hasattr(value, "x") and hasattr(value, "z"):
+        return [value.x, value.y, value.z]
+    return list(np.atleast_1d(np.asarray(value, dtype=float)))
+
+
+def test_every_message_field_of_the_field_list_carries_the_core_value(default_gait):
+    msg = deserialize_message(serialize_message(plan_msg(default_gait, Header(frame_id="stance_foot"))), GaitPlan)
+    checked = 0
+    for field in FIELDS:
+        if field.msg is None:
+            continue
+        value = field.read(default_gait)
+        got = getattr(msg, field.msg)
+        if isinstance(value, str):
+            assert got == value, field.key
+        else:
+            assert np.allclose(_as_list(got), _as_list(value), rtol=0, atol=0), field.key
+        checked += 1
+    assert checked == 31  # every GaitPlan field but header, mode, reasons and trajectory
+    assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
+    assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)
+    point = msg.trajectory.points[-1]
+    assert np.allclose(point.positions, default_gait.figures.samples.q[-1], atol=0)
+    assert np.allclose(point.accelerations, default_gait.figures.samples.qdd[-1], atol=0)
+    assert list(point.effort) == [0.0] * 9  # ballistic: no joint torque
+
+
+def test_the_orbit_a_walk_needs_survives_the_message(default_gait):
+    orbit = orbit_from_msg(plan_msg(default_gait, Header()))
+    expected = PlannedOrbit.of(default_gait)
+    for name in ("q0", "q_t", "qd_a", "qd_b"):
+        assert np.array_equal(getattr(orbit, name), getattr(expected, name)), name
+    for name in ("params", "step_length", "period", "arm_amplitude", "mode", "effort", "converged", "admissible", "reasons"):
+        assert getattr(orbit, name) == getattr(expected, name), name
+
+
+def test_a_failed_solve_becomes_nan_and_its_reasons(planner):
+    failed = planner.plan(GaitRequest(0.45, 5.0, 0.4))
+    msg = plan_msg(failed, Header())
+    assert not msg.converged and list(msg.reasons) == list(failed.reasons) and msg.reasons
+    assert math.isnan(msg.effort_cost) and all(math.isnan(v) for v in msg.i_minus) and math.isnan(msg.ir2.z)
+    assert msg.trajectory.points == []
+    assert not orbit_from_msg(msg).converged
+
+
+def test_requests_take_the_defaults_and_unknown_modes_are_refused():
+    req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL)
+    core = request_from_msg(req, "aoustin2013")
+    assert core == GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013", "theta", "l1")
+    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1")
+    with pytest.raises(ValueError, match="unknown gait mode 7"):
+        request_from_msg(PlanGait.Request(mode=7), "aoustin2013")
+
+
+def test_the_offline_constants_agree_with_the_interfaces():
+    assert {kind.name: int(kind) for kind in EventKind} == {
+        name: getattr(GaitEvent, name) for name in ("TOUCHDOWN", "FALL", "FINISHED", "NOT_STARTED")}
+    assert MODE_CODES == {PlanGait.Request.NORMAL: GaitMode.NORMAL, PlanGait.Request.ANTI_NORMAL: GaitMode.ANTI_NORMAL}
