@@ -1,7 +1,8 @@
 """Command line: ``biped-gait plan`` (one gait, printed and optionally saved as JSON),
 ``biped-gait urdf`` (the robot description), and the arm-swing study: ``sweep`` (grids of
 gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effort),
-``figure`` (the paper's Fig. 4 and Fig. 5) and ``results-page`` (docs/results.md).
+``figure`` (the paper's Fig. 4 and Fig. 5) and ``results-page`` (docs/results.md); ``atlas``
+(build, show, check the gait atlases the planner starts from, ``atlas_cli``).
 Degrees at this edge; SI and radians inside.
 
 Errors in the input print one line on stderr and exit with status 2; a gait that does not
@@ -18,6 +19,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from . import atlas_cli
 from .arguments import OneLineParser
 from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from .core.planner import GaitPlanner, GaitRequest
@@ -26,7 +28,8 @@ from .recording.recover import is_complete, recover
 from .studies.executors import open_executor
 from .studies.figures import save, sweep_figures
 from .studies.optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
-from .studies.results_page import write_results_page
+from .studies.maps import compute_maps, reading
+from .studies.results_page import maps_figures, write_results_page
 from .studies.study import FIG4_CASES, FIG5_CASE, run_study
 from .studies.sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
 from .studies.sweep_output import SweepFiles
@@ -53,12 +56,6 @@ def _add_alpha_step(parser: argparse.ArgumentParser) -> None:
                         f"{math.degrees(COARSE_STEP):g}")
 
 
-def _add_seed_period(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--seed-period", type=float, metavar="T0",
-                        help="reach the first gait of each alpha sweep by continuation in T from T0 (s), where "
-                        "the straight-line start finds the human-like gait (e.g. 0.45); default: start cold")
-
-
 def _add_axis(parser: argparse.ArgumentParser, flag: str, what: str, default: str) -> None:
     group = parser.add_mutually_exclusive_group()
     group.add_argument(f"--{flag}", nargs="+", type=float, metavar="V", help=f"{what}: values, default {default}")
@@ -80,7 +77,6 @@ def _study_parsers(sub) -> None:
     _add_axis(sweep, "alpha-deg", "arm amplitude alpha (deg)", "the range 0 45 1.5")
     sweep.add_argument("--mode", nargs="+", default=["normal", "anti-normal"], help="gait modes, default both")
     _add_params(sweep)
-    _add_seed_period(sweep)
     sweep.add_argument("--out", type=Path, default=Path("sweep-results"), metavar="DIR",
                        help="output folder (sweep.csv, sweep.json, W_vs_alpha_*.png), default sweep-results")
     _add_executor(sweep)
@@ -94,7 +90,6 @@ def _study_parsers(sub) -> None:
     optimize.add_argument("--alpha-range", nargs=2, type=float, default=[math.degrees(a) for a in ALPHA_RANGE],
                           metavar=("LOW", "HIGH"), help="arm amplitudes searched (deg), default 0 45")
     _add_alpha_step(optimize)
-    _add_seed_period(optimize)
 
     figure = sub.add_parser("figure", help="draw one of the paper's figures as PNG")
     figure.add_argument("name", choices=("fig4", "fig5"),
@@ -104,6 +99,12 @@ def _study_parsers(sub) -> None:
     _add_params(figure)
     _add_alpha_step(figure)
     _add_executor(figure)
+
+    maps = sub.add_parser("maps", help="draw where walking is possible: the admissible region, alpha* and W*, "
+                          "the anti-normal cost ratio")
+    _add_params(maps)
+    maps.add_argument("--out", type=Path, default=Path("maps"), metavar="DIR", help="folder of the PNG files, default maps")
+    _add_executor(maps)
 
     page = sub.add_parser("results-page", help="compute the study and write the results page with its figures")
     page.add_argument("--out", type=Path, default=Path("docs/results.md"),
@@ -140,6 +141,7 @@ def _parser() -> argparse.ArgumentParser:
     recover_parser.add_argument("bag", type=Path, help="the recording's .mcap file or its directory")
     recover_parser.add_argument("--out", type=Path, help="output .mcap (default: <name>_recovered/<name>_recovered_0.mcap)")
     _study_parsers(sub)
+    atlas_cli.add_parser(sub, _add_executor)
     return parser
 
 
@@ -152,7 +154,6 @@ def _sweep(args: argparse.Namespace) -> int:
         inclusive_range(*ALPHA_RANGE, COARSE_STEP, "arm amplitude") if alphas_deg is None else
         [math.radians(a) for a in alphas_deg],
         args.mode,
-        seed_period=args.seed_period,
         confirmed=args.yes,
     )
     files = SweepFiles(args.out, grid)
@@ -181,7 +182,7 @@ def _optimize_arms(args: argparse.Namespace) -> int:
     low, high = (math.radians(a) for a in args.alpha_range)
     try:
         optimum = optimal_arm_amplitude(planner, args.step_length, args.period, args.mode, (low, high),
-                                        math.radians(args.alpha_step), args.seed_period)
+                                        math.radians(args.alpha_step))
     except NoAdmissibleGait as exc:
         print(f"biped-gait: {exc}", file=sys.stderr)
         return 1
@@ -211,6 +212,16 @@ def _results_page(args: argparse.Namespace) -> int:
     return 0
 
 
+def _maps(args: argparse.Namespace) -> int:
+    params = load_params(args.params)
+    with open_executor(args.workers, args.scheduler) as executor:
+        maps = compute_maps(params, executor)
+    paths = [save(fig, args.out / name) for fig, name in maps_figures(maps).values()]
+    print("\n".join(reading(maps)))
+    print("written: " + ", ".join(str(p) for p in paths))
+    return 0
+
+
 def _recover(args: argparse.Namespace) -> int:
     files = sorted(args.bag.glob("*.mcap")) if args.bag.is_dir() else [args.bag]
     if not files or not files[0].is_file():
@@ -226,6 +237,7 @@ def _recover(args: argparse.Namespace) -> int:
 
 
 STUDY_COMMANDS = {"sweep": _sweep, "optimize-arms": _optimize_arms, "figure": _figure, "results-page": _results_page,
+                  "atlas": atlas_cli.run, "maps": _maps,
                   "recover": _recover}
 
 

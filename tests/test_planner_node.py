@@ -117,10 +117,23 @@ def test_eight_concurrent_clients_all_get_correct_answers(ros, planner):
         ros.node.destroy_client(c)
 
 
+def test_an_inadmissible_gait_is_refused_with_its_reasons_also_from_the_cache(ros):
+    """T = 0.35 s: the human-like gait exists but its swing knee bends backwards."""
+    request = plan_request(period=0.35)
+    first = ros.call(ros.client, request)
+    again = ros.call(ros.client, request)
+    for response in (first, again):
+        assert not response.success and not response.plan.admissible and response.plan.converged
+        assert response.message.startswith("not admissible: swing knee bends backwards")
+        assert "nearest admissible (atlas grid): T in [" in response.message
+        assert list(response.plan.reasons) and response.plan.hint in response.message
+    assert again.message == first.message + " (cached)"
+
+
 def test_identical_requests_are_answered_from_the_cache(ros):
     first = ros.call(ros.client, plan_request(arm_amplitude=0.3))
     again = ros.call(ros.client, plan_request(arm_amplitude=0.3))
-    assert first.success and again.success and again.message == "cached"
+    assert first.success and again.success and again.message == first.message + " (cached)"
     assert again.plan.effort_cost == first.plan.effort_cost and again.plan.header == first.plan.header
 
 

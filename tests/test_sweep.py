@@ -16,7 +16,6 @@ from biped_gait.core.params import load_params
 from biped_gait.studies.sweep import (
     MAX_CASES,
     SweepGrid,
-    continue_in_period,
     inclusive_range,
     solve_chain,
     solve_grid,
@@ -72,7 +71,6 @@ def test_grid_is_normalized():
         (dict(periods=[0.0]), "period must be positive"),
         (dict(alphas=[0.1, math.radians(95)]), "arm amplitude must be in [0, 90) deg"),
         (dict(alphas=np.linspace(0, 1, MAX_CASES)), f"the sweep has {2 * MAX_CASES} cases (more than {MAX_CASES})"),
-        (dict(seed_period=-0.45), "period must be positive"),
     ],
 )
 def test_bad_grids_are_refused(axes, message):
@@ -92,28 +90,29 @@ def test_chain_by_continuation_equals_cold_solves(planner):
     alphas = np.radians([20.0, 21.0, 22.0])
     chain = solve_chain(planner, 0.45, 0.45, "normal", alphas)
     for alpha, warm in zip(alphas, chain):
-        cold = planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"))
+        cold = planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"), cold=True)
         assert warm.converged and warm.admissible
         assert warm.W == pytest.approx(cold.W, rel=1e-9)
         assert warm.theta == pytest.approx(cold.theta, abs=1e-10)
-    assert chain[1].step.evaluations < chain[0].step.evaluations  # warm-started from its neighbour
+    assert [g.found for g in chain] == ["atlas", "guess", "guess"]  # then warm-started from its neighbour
+    cold = planner.plan(GaitRequest(0.45, 0.45, float(alphas[1]), "normal"), cold=True)
+    assert chain[1].step.evaluations < cold.step.evaluations
 
 
-def test_a_failed_warm_start_is_solved_again_cold(planner, default_gait):
+def test_a_failed_warm_start_is_solved_again_by_the_planner(planner, default_gait):
     garbage = (np.full(9, 50.0), 0.3)
     assert not planner.plan(DEFAULT_REQUEST, guess=garbage).converged
     result = solve_near(planner, DEFAULT_REQUEST, garbage)
     assert result.converged and result.W == pytest.approx(default_gait.W, rel=1e-9)
 
 
-def test_continuation_in_period_reaches_the_human_like_gait(planner):
+def test_a_chain_starts_on_the_human_like_gait_where_the_cold_start_does_not(planner):
     """At L = 0.45, T = 0.50 the straight-line start lands on a gait whose swing knee bends
-    backwards; continued in T from 0.45 s, the chain starts on the admissible human-like gait."""
-    cold = solve_chain(planner, 0.45, 0.50, "normal", (0.0,))[0]
+    backwards; the chain's first gait, found by the planner, is the admissible human-like one."""
+    cold = planner.plan(GaitRequest(0.45, 0.50, 0.0, "normal"), cold=True)
     assert cold.converged and not cold.admissible and "swing knee bends backwards" in cold.reasons[0]
-    seeded = solve_chain(planner, 0.45, 0.50, "normal", (0.0,), seed_period=0.45)[0]
-    assert seeded.admissible and seeded.figures.q9_min >= -1e-9
-    assert continue_in_period(planner, 0.45, 0.45, 0.50, 0.0, "normal") is not None
+    first = solve_chain(planner, 0.45, 0.50, "normal", (0.0,))[0]
+    assert first.admissible and first.figures.q9_min >= -1e-9 and first.found in ("atlas", "continuation")
 
 
 def test_local_processes_keep_failed_gaits_and_write_both_files(tmp_path):

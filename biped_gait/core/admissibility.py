@@ -1,14 +1,19 @@
-"""Whether a gait can be walked: the verdict on a solved gait (docs/model.md section 4, the
-conditions checked a posteriori) and the reasons when it cannot.
+"""Whether a gait can be walked: the verdict on a solved gait (docs/model.md section 4.2) and the
+conditions that limit it, each a bit of a bitmask so that an atlas can store which held.
 
-Margins: a figure counts as positive when above them (vertical ground reaction in N, swing-tip
-height in m); the human-like branch has swing-knee flexion q9 >= -KNEE_TOLERANCE (rad).
+Conditions, checked a posteriori on the ballistic step (margins: a figure counts as positive
+when above them): the vertical ground reaction stays positive (N); the swing tip stays above the
+ground on (0.05 T, 0.95 T) (m); the swing knee never bends backwards (q9 >= -KNEE_TOLERANCE
+rad; negative q9 is a hyperextended swing knee, the mark of the backward-knee twin); the ground
+reaction stays in the friction cone of the parameter set's coefficient (max |F_xy| / F_z <= mu).
+Before these: the BVP converged and the double support's impulse problem has a solution.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import IntFlag
 
 from .bvp import BvpSolution
 from .impulses import ImpulseSolution
@@ -19,12 +24,34 @@ HEIGHT_MARGIN = 0.0  # m
 KNEE_TOLERANCE = 1e-9  # rad: q9 >= -this is the human-like branch
 
 
+class Limit(IntFlag):
+    """The conditions that make a gait inadmissible (several may hold)."""
+
+    NO_CONVERGENCE = 1  # the ballistic BVP did not converge
+    NO_IMPULSES = 2  # the double support's impulse problem has no solution
+    GROUND_REACTION = 4  # vertical ground reaction not positive
+    CLEARANCE = 8  # the swing tip touches or enters the ground
+    KNEE_HYPEREXTENSION = 16  # the swing knee bends backwards (q9 < 0)
+    FRICTION = 32  # the ground reaction leaves the friction cone
+
+
+LIMIT_NAMES = {
+    Limit.NO_CONVERGENCE: "no convergence",
+    Limit.NO_IMPULSES: "no impulses",
+    Limit.GROUND_REACTION: "vertical ground reaction",
+    Limit.CLEARANCE: "swing clearance",
+    Limit.KNEE_HYPEREXTENSION: "knee hyperextension",
+    Limit.FRICTION: "friction ratio",
+}
+
+
 @dataclass(frozen=True)
 class Verdict:
-    """``admissible``, and otherwise the reasons (one line each)."""
+    """``admissible``, and otherwise the reasons (one line each) and the conditions (``limits``)."""
 
     admissible: bool
     reasons: tuple[str, ...]
+    limits: Limit = Limit(0)
 
 
 def failure_message(step: BvpSolution, impulses: ImpulseSolution | None) -> str:
@@ -36,20 +63,44 @@ def failure_message(step: BvpSolution, impulses: ImpulseSolution | None) -> str:
     return ""
 
 
-def judge(step: BvpSolution, impulses: ImpulseSolution | None, figures: StepFigures | None) -> Verdict:
-    """The verdict on a gait from its ballistic step, its double support's impulses and its
-    step figures (the last two None when the BVP did not converge)."""
-    reasons = []
+def figure_limits(min_grf_z: float, min_swing_height: float, q9_min: float, max_friction_ratio: float,
+                  friction: float) -> Limit:
+    """The conditions a solved ballistic step violates, from its figures (N, m, rad, -)."""
+    limits = Limit(0)
+    if not min_grf_z > GRF_MARGIN:
+        limits |= Limit.GROUND_REACTION
+    if not min_swing_height > HEIGHT_MARGIN:
+        limits |= Limit.CLEARANCE
+    if not q9_min >= -KNEE_TOLERANCE:
+        limits |= Limit.KNEE_HYPEREXTENSION
+    if not max_friction_ratio <= friction:
+        limits |= Limit.FRICTION
+    return limits
+
+
+def describe(limits: Limit, min_grf_z: float, min_swing_height: float, q9_min: float, max_friction_ratio: float,
+             friction: float) -> list[str]:
+    """One line per violated figure condition of ``limits``, with its value."""
+    lines = []
+    if Limit.GROUND_REACTION in limits:
+        lines.append(f"vertical ground reaction not positive (min {min_grf_z:.3g} N)")
+    if Limit.CLEARANCE in limits:
+        lines.append(f"swing tip touches or enters the ground (min height {min_swing_height:.3g} m)")
+    if Limit.KNEE_HYPEREXTENSION in limits:
+        lines.append(f"swing knee bends backwards (min q9 {math.degrees(q9_min):.3g} deg)")
+    if Limit.FRICTION in limits:
+        lines.append(f"friction ratio {max_friction_ratio:.3g} exceeds the friction coefficient {friction:g}")
+    return lines
+
+
+def judge(step: BvpSolution, impulses: ImpulseSolution | None, figures: StepFigures | None, friction: float) -> Verdict:
+    """The verdict on a gait from its ballistic step, its double support's impulses, its step
+    figures (the last two None when the BVP did not converge) and the friction coefficient."""
     message = failure_message(step, impulses)
     if not step.converged:
-        reasons.append(message or "the ballistic BVP did not converge")
-    elif impulses is None or not math.isfinite(impulses.W):
-        reasons.append(message or "the impulse problem has no solution")
-    else:
-        if not figures.min_grf_z > GRF_MARGIN:
-            reasons.append(f"vertical ground reaction not positive (min {figures.min_grf_z:.3g} N)")
-        if not figures.min_swing_height > HEIGHT_MARGIN:
-            reasons.append(f"swing tip touches or enters the ground (min height {figures.min_swing_height:.3g} m)")
-        if not figures.q9_min >= -KNEE_TOLERANCE:
-            reasons.append(f"swing knee bends backwards (min q9 {math.degrees(figures.q9_min):.3g} deg)")
-    return Verdict(not reasons, tuple(reasons))
+        return Verdict(False, (message or "the ballistic BVP did not converge",), Limit.NO_CONVERGENCE)
+    if impulses is None or not math.isfinite(impulses.W):
+        return Verdict(False, (message or "the impulse problem has no solution",), Limit.NO_IMPULSES)
+    values = (figures.min_grf_z, figures.min_swing_height, figures.q9_min, figures.max_friction_ratio, friction)
+    limits = figure_limits(*values)
+    return Verdict(not limits, tuple(describe(limits, *values)), limits)

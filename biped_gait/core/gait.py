@@ -63,7 +63,10 @@ class DoubleSupport:
 @dataclass(frozen=True)
 class Gait:
     """A solved gait: ``step`` always; ``double_support`` and ``figures`` when the BVP
-    converged; the ``verdict``; the solve's wall time (s)."""
+    converged; the ``verdict``; the solve's wall time (s); how it was ``found`` (``guess``: from
+    the caller's warm start, ``atlas``: from the atlas's interpolated warm start,
+    ``continuation``: by continuation from the nearest admissible gait, ``cold``: from the
+    straight-line start); and, when it is not admissible, a ``hint`` of where admissible gaits are."""
 
     problem: GaitProblem
     step: BvpSolution
@@ -71,6 +74,8 @@ class Gait:
     figures: StepFigures | None
     verdict: Verdict
     solve_time_s: float
+    found: str = "cold"
+    hint: str = ""
 
     # The request's figures, as every user of a gait reads them.
     step_length = property(lambda self: self.problem.step_length, doc="L (m)")

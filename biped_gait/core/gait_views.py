@@ -87,6 +87,8 @@ FIELDS: tuple[Field, ...] = (
     Field("admissible", lambda g: g.admissible, "admissible"),
     Field("message", lambda g: g.message),
     Field("reasons", lambda g: list(g.reasons)),
+    Field("found", lambda g: g.found, "found"),
+    Field("hint", lambda g: g.hint, "hint"),
     Field("theta", lambda g: g.step.theta, "theta"),
     Field("slack", _ds("slack", 0.0), "slack"),
     Field("W", lambda g: g.W, "effort_cost"),
@@ -160,9 +162,12 @@ def summary(gait: "Gait") -> str:
     lines = [
         f"gait  L = {gait.step_length:.3f} m, T = {gait.period:.3f} s, alpha = {deg(gait.arm_amplitude):.2f} deg, "
         f"{d['mode']}, params {d['params']}, closure {d['closure']}, effort {d['effort']}",
-        f"converged {gait.converged} ({d['bvp_iterations']} Newton iterations), admissible {gait.admissible}",
+        f"converged {gait.converged} ({d['bvp_iterations']} Newton iterations, found by {gait.found}), "
+        f"admissible {gait.admissible}",
     ]
     lines += [f"  not admissible: {r}" for r in gait.reasons]
+    if gait.hint:
+        lines.append(f"  {gait.hint}")
     if gait.converged and math.isfinite(gait.W):
         fmt = lambda v: "[" + ", ".join(f"{x:8.3f}" for x in v) + "]"  # noqa: E731
         lines += [

@@ -16,6 +16,7 @@ from pathlib import Path
 import yaml
 
 DEFAULT_PARAMS = "aoustin2013"
+DEFAULT_FRICTION = 0.5  # Coulomb coefficient of the foot on the floor when a file gives none
 LINK_NAMES = ("shin", "thigh", "trunk", "arm")
 GEOMETRY_KEYS = ("hip_half_width", "torso_joint_height", "shoulder_half_width", "shoulder_height")
 
@@ -49,6 +50,7 @@ class BipedParams:
     torso_joint_height: float
     shoulder_half_width: float
     shoulder_height: float
+    friction: float = DEFAULT_FRICTION
 
     @property
     def leg_length(self) -> float:
@@ -106,7 +108,15 @@ def params_from_dict(raw: object, source: str = "<dict>") -> BipedParams:
     gravity = _number(raw.get("gravity", 9.81), f"{source}: gravity")
     if gravity <= 0:
         raise ValueError(f"parameter file {source}: gravity must be positive, got {gravity}")
-    return BipedParams(name=str(raw.get("name", Path(source).stem)), gravity=gravity, **links, **geo)
+    friction = _friction(raw.get("friction", DEFAULT_FRICTION), f"{source}: friction")
+    return BipedParams(name=str(raw.get("name", Path(source).stem)), gravity=gravity, **links, **geo, friction=friction)
+
+
+def _friction(value: object, what: str) -> float:
+    """A friction coefficient: positive, or ``inf`` (written .inf in YAML) for no limit."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or math.isnan(value) or not value > 0:
+        raise ValueError(f"parameter file {what} must be a positive number or .inf, got {value!r}")
+    return float(value)
 
 
 def _require(mapping: dict, key: str, source: str, prefix: str = "") -> object:

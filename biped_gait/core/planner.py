@@ -1,22 +1,30 @@
 """Planning one verified periodic gait: request checks, the BVP with its closure, the optimal
 impulses of the double support, the step's figures, the verdict.
 
-``GaitPlanner.plan`` is the core entry point of the CLI, the studies and the ROS nodes. Inputs
-and outputs are SI with angles in radians; a bad request raises ``ValueError`` with a one-line
-message (angles quoted in degrees, as users give them).
+``GaitPlanner.plan`` is the core entry point of the CLI, the studies and the ROS nodes. Without
+a caller's warm start it finds the gait on the human-like branch: from the gait atlas's
+interpolated warm start; failing that (or if that gait is not admissible), by continuation from
+the nearest admissible atlas gait (or, without an atlas, from the human-like gait at
+L = T = 0.45 s); last, from the straight-line cold start. Inputs and outputs are SI with angles
+in radians; a bad request raises ``ValueError`` with a one-line message (angles quoted in
+degrees, as users give them).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .admissibility import judge
+from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
+from .continuation import continue_to
 from .flow import hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem
 from .hybrid import HybridStep
@@ -25,6 +33,9 @@ from .model import BipedModel
 from .params import BipedParams, load_params
 from .reports import StepFigures, StepTrajectory, energy_drift, step_figures
 from .settings import DEFAULTS, Settings
+
+SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
+BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm start left the branch
 
 
 @dataclass(frozen=True)
@@ -78,34 +89,108 @@ class GaitPlanner:
     Not thread-safe (Pinocchio data are reused): give each thread or process its own planner.
     """
 
-    def __init__(self, params: BipedParams | str | None = None, settings: Settings = DEFAULTS):
+    def __init__(self, params: BipedParams | str | None = None, settings: Settings = DEFAULTS, atlas: bool = True,
+                 on_note: Callable[[str], None] | None = None):
         """``params``: a parameter set, its name or file (None: the default); ``settings``: the
-        numerical settings (grids, tolerance, iterations, samples)."""
+        numerical settings (grids, tolerance, iterations, samples); ``atlas``: use the gait
+        atlas of these parameters (shipped, or in the cache) when there is a current one;
+        ``on_note``: told (once per mode) why there is none (default: a Python warning)."""
         self.settings = settings
+        self.source = params if isinstance(params, str) else None
         self.params = params if isinstance(params, BipedParams) else load_params(params)
+        self.use_atlas = atlas
+        self._atlases: dict[GaitMode, Atlas | None] = {}
+        self.atlas_notes: dict[GaitMode, str] = {}
+        self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
         self.hybrid = HybridStep(self.model)
         self.flow = self.hybrid.flow(settings.fine_steps)
         self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
 
-    def plan(self, request: GaitRequest, guess: tuple[np.ndarray, float] | None = None) -> Gait:
-        """Solve one gait. ``guess`` = (qd(0), theta) of a nearby gait warm-starts the BVP.
+    def atlas(self, mode: GaitMode) -> Atlas | None:
+        """The current atlas of these parameters and ``mode`` (loaded once), or None; why not
+        is in ``atlas_notes[mode]`` (and said once as a warning)."""
+        if mode not in self._atlases:
+            atlas = None
+            if self.use_atlas:
+                try:
+                    atlas = Atlas.load(atlas_path(self.params, mode), self.params, self.source)
+                except AtlasError as exc:
+                    self.atlas_notes[mode] = str(exc)
+                    self._note(f"{exc}; planning without it ({mode.value} gaits)")
+            self._atlases[mode] = atlas
+        return self._atlases[mode]
+
+    def plan(self, request: GaitRequest, guess: tuple[np.ndarray, float] | None = None, cold: bool = False) -> Gait:
+        """Solve one gait. ``guess`` = (qd(0), theta) of a nearby gait warm-starts the BVP (a
+        continuation chain's own step); ``cold``: only the straight-line start; without either
+        the gait is found on the human-like branch (module docstring). ``Gait.found`` says how.
 
         Raises ``ValueError`` for an invalid request; a solve that fails is returned with
-        ``converged`` or ``admissible`` False and the reasons in ``verdict``.
+        ``converged`` or ``admissible`` False and the reasons in ``verdict`` (and a ``hint`` of
+        where admissible gaits are, when the atlas knows).
         """
         if request.params and request.params != self.params.name:
             raise ValueError(f"this planner holds parameter set {self.params.name!r}, not {request.params!r}")
         problem = validate_request(request, self.params)
         start = time.perf_counter()
+        if guess is not None or cold:
+            gait = self._solve(problem, guess, "guess" if guess is not None else "cold")
+        else:
+            gait = self._find(problem)
+        return replace(gait, solve_time_s=time.perf_counter() - start)
+
+    def _find(self, problem: GaitProblem) -> Gait:
+        """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold."""
+        point = (problem.step_length, problem.period, problem.arm_amplitude)
+        atlas = self.atlas(problem.mode)
+        first = None
+        guess = atlas.guess(point) if atlas is not None else None
+        if guess is not None:
+            first = self._solve(problem, guess, "atlas")
+            if not _near(first, guess):
+                first = None
+            elif first.admissible or not atlas.admissible_near(point):
+                return self._hinted(first, atlas, point)
+        origin = self._origin(problem, atlas)
+        if origin is not None:
+            guess = continue_to(self.hybrid, self.coarse_flow or self.flow, problem.mode, problem.closure, self.settings,
+                                origin[0], origin[1], point)
+            if guess is not None:
+                gait = self._solve(problem, guess, "continuation")
+                if gait.converged and (gait.admissible or first is None):
+                    return self._hinted(gait, atlas, point)
+        if first is not None:
+            return self._hinted(first, atlas, point)
+        return self._hinted(self._solve(problem, None, "cold"), atlas, point)
+
+    def _origin(self, problem: GaitProblem, atlas: Atlas | None):
+        """Where a continuation to ``problem`` starts: the nearest admissible atlas node, else
+        the human-like gait at ``SEED``, solved cold; as ((L, T, alpha), (qd(0), theta)), or None
+        if that fails."""
+        point = (problem.step_length, problem.period, problem.arm_amplitude)
+        index = atlas.nearest(point) if atlas is not None else None
+        if index is not None:
+            return atlas.grid.point(index), (atlas.nodes["qd_a"][index], float(atlas.nodes["theta"][index]))
+        step = solve_bvp(self.hybrid, self.flow, *SEED, problem.mode, problem.closure, None, self.settings, self.coarse_flow)
+        return (SEED, (step.qd_a, step.theta)) if step.converged else None
+
+    @staticmethod
+    def _hinted(gait: Gait, atlas: Atlas | None, point: tuple[float, float, float]) -> Gait:
+        if gait.admissible or atlas is None:
+            return gait
+        return replace(gait, hint=atlas.hint(point))
+
+    def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
+        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start)."""
         step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                          problem.mode, problem.closure, guess, self.settings, self.coarse_flow)
         double_support = figures = None
         if step.converged:
             double_support = self._double_support(step, problem)
             figures = self._figures(step, problem.period)
-        verdict = judge(step, double_support.impulses if double_support else None, figures)
-        return Gait(problem, step, double_support, figures, verdict, time.perf_counter() - start)
+        verdict = judge(step, double_support.impulses if double_support else None, figures, self.params.friction)
+        return Gait(problem, step, double_support, figures, verdict, math.nan, found)
 
     def _double_support(self, step: BvpSolution, problem: GaitProblem) -> DoubleSupport:
         bm = self.model
@@ -145,3 +230,8 @@ class GaitPlanner:
         qdd = np.array([self.flow.acceleration(a, b) for a, b in zip(q, qd)])
         traj = StepTrajectory(times, q, qd, qdd)
         return step_figures(self.model, traj, period, energy_drift(self.model, step.nodes[1], step.nodes[2]))
+
+
+def _near(gait: Gait, guess: tuple[np.ndarray, float]) -> bool:
+    """Whether a solve stayed near its warm start (on the warm start's branch)."""
+    return gait.converged and float(np.max(np.abs(gait.step.qd_a - guess[0]))) <= BRANCH_BOUND

@@ -346,6 +346,9 @@ class Walk:
         if not orbit.converged:
             self.problem = "the plan did not converge"
             return
+        if not orbit.admissible:
+            self.problem = "the plan is not admissible: " + "; ".join(orbit.reasons)
+            return
         try:
             self.model = BipedModel.from_params(load_params(orbit.params or None))
         except ValueError as exc:

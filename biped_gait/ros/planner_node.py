@@ -59,7 +59,7 @@ class GaitPlannerNode(Node):
         self._default_params = value("default_params").value
         load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
-        self._cache: OrderedDict[tuple, GaitPlan] = OrderedDict()
+        self._cache: OrderedDict[tuple, PlanGait.Response] = OrderedDict()
         self._cache_lock = threading.Lock()
         self._sequence = 0
         self.settings = replace(DEFAULTS, samples=value("trajectory_samples").value, tolerance=value("bvp_tolerance").value,
@@ -117,7 +117,7 @@ class GaitPlannerNode(Node):
             raise ValueError(f"unknown parameter set {params!r}: give one of {', '.join(shipped_param_names())}")
         key = (group, params)
         if key not in self._planners:
-            self._planners[key] = GaitPlanner(params, self.settings)
+            self._planners[key] = GaitPlanner(params, self.settings, on_note=self.get_logger().warning)
         return self._planners[key]
 
     def _header(self) -> Header:
@@ -137,6 +137,9 @@ class GaitPlannerNode(Node):
         return response
 
     def _answer(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
+        """Answer from the cache (the first answer's success and message, marked cached), else
+        plan: ``success`` only for an admissible gait; otherwise the reasons and, when the atlas
+        knows, where the nearest admissible gaits are."""
         core_request = request_from_msg(request, self._default_params)
         key = request_key(core_request)
         with self._cache_lock:
@@ -144,21 +147,23 @@ class GaitPlannerNode(Node):
             if cached is not None:
                 self._cache.move_to_end(key)
         if cached is not None:
-            response.success, response.message, response.plan = True, "cached", cached
+            response.success, response.plan = cached.success, cached.plan
+            response.message = f"{cached.message} (cached)"
             return
-        result = self._planner(core_request.params, "service").plan(core_request)
-        plan = plan_msg(result, self._header())
-        response.plan = plan
-        if not result.converged:
-            response.success, response.message = False, result.message or "the ballistic BVP did not converge"
-            return
-        response.success = True
-        response.message = "admissible" if result.admissible else "not admissible: " + "; ".join(result.reasons)
+        gait = self._planner(core_request.params, "service").plan(core_request)
+        response.plan = plan_msg(gait, self._header())
+        response.success = gait.admissible
+        if gait.admissible:
+            response.message = f"admissible (found by {gait.found})"
+        else:
+            reasons = "not admissible: " + "; ".join(gait.reasons)
+            response.message = f"{reasons}; {gait.hint}" if gait.hint else reasons
         with self._cache_lock:
-            self._cache[key] = plan
+            self._cache[key] = PlanGait.Response(success=response.success, message=response.message, plan=response.plan)
             while len(self._cache) > self.get_parameter("cache_size").value:
                 self._cache.popitem(last=False)
-        self._record(self.plan_publisher, plan)
+        if gait.admissible:
+            self._record(self.plan_publisher, response.plan)
 
     def _record_call(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
         """Record the exchange as a PlanGaitCall; a recording failure is logged, never raised."""

@@ -103,12 +103,11 @@ def optimal_arm_amplitude(
     mode: GaitMode | str = GaitMode.NORMAL,
     alpha_range: tuple[float, float] = ALPHA_RANGE,
     coarse_step: float = COARSE_STEP,
-    seed_period: float | None = None,
     on_result: Callable[[Gait], None] | None = None,
 ) -> ArmOptimum:
     """Minimize W over alpha in ``alpha_range`` (rad, the coarse sweep every ``coarse_step``
-    rad and the upper end) for L (m), T (s), ``mode``; the sweep's first gait continued in T
-    from ``seed_period`` (s) if given (``sweep.solve_chain``). ``on_result`` sees every gait
+    rad and the upper end) for L (m), T (s), ``mode``, the sweep a continuation chain
+    (``sweep.solve_chain``) from the gait the planner finds first. ``on_result`` sees every gait
     solved, coarse and refining, as it comes (progress reports; an exception it raises, such
     as ``Canceled``, ends the search).
 
@@ -125,7 +124,7 @@ def optimal_arm_amplitude(
     if alphas[-1] < high - 1e-12:
         alphas = (*alphas, high)
     mode_name = GaitMode.parse(mode).value
-    coarse = solve_chain(planner, step_length, period, mode_name, alphas, seed_period, on_result)
+    coarse = solve_chain(planner, step_length, period, mode_name, alphas, on_result)
     solved = dict(zip(alphas, coarse))
     values = np.array([r.W if r.usable else np.nan for r in coarse])
     if np.all(np.isnan(values)):
@@ -183,13 +182,11 @@ def compare_modes(
     period: float,
     alpha_range: tuple[float, float] = ALPHA_RANGE,
     coarse_step: float = COARSE_STEP,
-    seed_period: float | None = None,
 ) -> ModeComparison:
     """Worker entry: optimize the normal gait at L (m), T (s), then solve the anti-normal gait
-    at its alpha (the paper's comparison), with this worker's planner for ``params``; both
-    started by continuation in T from ``seed_period`` (s) if given."""
+    at its alpha (the paper's comparison), with this worker's planner for ``params``."""
     planner = planner_for(params)
-    normal = optimal_arm_amplitude(planner, step_length, period, GaitMode.NORMAL, alpha_range, coarse_step, seed_period)
-    [anti] = solve_chain(planner, step_length, period, GaitMode.ANTI_NORMAL.value, (normal.alpha,), seed_period)
+    normal = optimal_arm_amplitude(planner, step_length, period, GaitMode.NORMAL, alpha_range, coarse_step)
+    [anti] = solve_chain(planner, step_length, period, GaitMode.ANTI_NORMAL.value, (normal.alpha,))
     return ModeComparison(normal, anti)
 

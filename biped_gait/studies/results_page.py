@@ -17,11 +17,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .figures import save
+from .maps import WalkingMaps, compute_maps, optimum_figure, ratio_figure, reading, region_figure
 from ..core.planner import GaitPlanner, GaitRequest
 from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from ..core.params import DEFAULT_PARAMS, load_params
 from ..core.gait import Gait
-from .sweep import solve_near
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
 
 PARAMETER_SETS = (DEFAULT_PARAMS, "aoustin2013-table")  # the default and the paper's table verbatim
@@ -65,7 +65,7 @@ class Reference:
         alpha = math.radians(PAPER_ALPHA_DEG)
 
         def cold(*request, **options) -> Gait:
-            return solve_near(planner, GaitRequest(*request, **options), None)
+            return planner.plan(GaitRequest(*request, **options), cold=True)
 
         return cls(
             normal=cold(*FIG5_CASE, alpha, "normal"),
@@ -284,12 +284,12 @@ def _other_periods(default: Study, reference: Reference) -> str:
     continued = [c for case, c in default.comparisons.items() if case[1] == cold.period]
     admissible = all(c.normal.gait.usable and c.anti_normal.usable for c in continued)
     return (
-        f"- **Periods other than {PAPER_PERIOD:g} s** (the paper gives no numbers for them): each alpha sweep starts "
-        f"from a gait reached by continuation in T from {PAPER_PERIOD:g} s, because Newton's method from the "
-        f"straight-line start does not find the human-like gait everywhere. From that start at "
-        f"L = {cold.step_length:g} m, T = {cold.period:g} s, alpha = {math.degrees(cold.arm_amplitude):g} deg "
-        f"(where the sweep starts) it {outcome}; by continuation, the tables' gaits at that period are "
-        + ("admissible." if admissible else "not all admissible.")
+        f"- **Periods other than {PAPER_PERIOD:g} s** (the paper gives no numbers for them): the planner finds "
+        "each alpha sweep's first gait on the human-like branch from the gait atlas (built by continuation from "
+        "L = T = 0.45 s), because Newton's method from the straight-line start does not find the human-like gait "
+        f"everywhere. From that start at L = {cold.step_length:g} m, T = {cold.period:g} s, "
+        f"alpha = {math.degrees(cold.arm_amplitude):g} deg it {outcome}; from the atlas, the tables' gaits at "
+        "that period are " + ("admissible." if admissible else "not all admissible.")
     )
 
 
@@ -309,12 +309,42 @@ def differences(default: Study, table: Study, reference: Reference) -> list[str]
     ]
 
 
+def maps_figures(maps: WalkingMaps) -> dict[str, tuple]:
+    """Caption -> (figure, file name) of one parameter set's maps."""
+    name = maps.params
+    return {
+        f"Where walking is possible, parameter set {name}: the admissible region and its limits": (
+            region_figure(maps), f"map-region-{name}.png"),
+        f"Optimal arm amplitude and least effort over the admissible region, parameter set {name}": (
+            optimum_figure(maps), f"map-optimum-{name}.png"),
+        f"Anti-normal over normal effort at the optimal alpha, parameter set {name}": (
+            ratio_figure(maps), f"map-ratio-{name}.png"),
+    }
+
+
+def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> list[str]:
+    lines = ["", "## Where walking is possible (maps beyond the paper)", "",
+             "The paper studied three points. From the gait atlas (every (L, T, alpha) node solved on the human-like "
+             "branch by continuation, `biped-gait atlas build`) and from optimizations on every other atlas node, "
+             "these maps show where an admissible ballistic gait exists, what limits it elsewhere, and how the "
+             "optimal arm swing and its effort vary. `biped-gait maps` draws them for any parameter set.", ""]
+    for maps in all_maps:
+        lines += [f"### Parameter set `{maps.params}`", ""]
+        lines += reading(maps)
+        lines.append("")
+        lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
+                  if f"parameter set {maps.params}" in caption and path.startswith("map-")]
+    return lines
+
+
 def render(
-    studies: Sequence[Study], references: dict[str, Reference], figures: dict[str, str], coarse_step: float
+    studies: Sequence[Study], references: dict[str, Reference], figures: dict[str, str], coarse_step: float,
+    all_maps: Sequence[WalkingMaps] = (),
 ) -> str:
     """The whole page as Markdown. ``studies``: the default set's and the table set's (in
     that order); ``references`` by set name; ``figures`` maps a caption to a path relative to
-    the page; ``coarse_step`` (rad) is the study's alpha spacing."""
+    the page; ``coarse_step`` (rad) is the study's alpha spacing; ``all_maps`` the maps of
+    where walking is possible, per set."""
     default, table = studies
     lines = [
         "# Arm-swing study: results",
@@ -333,7 +363,8 @@ def render(
         "## Figures",
         "",
     ]
-    lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()]
+    lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
+              if not path.startswith("map-")]
     for study in studies:
         label = " (default)" if study is default else ""
         lines += ["", f"## Parameter set `{study.params.name}`{label}", "", "Effort of the double support (N m s):",
@@ -348,6 +379,7 @@ def render(
     lines += _claims_section(studies)
     lines += ["", "## Where the project and the paper differ, and why", ""]
     lines += differences(default, table, references[default.params.name])
+    lines += _maps_section(all_maps, figures)
     return "\n".join(lines) + "\n"
 
 
@@ -366,8 +398,11 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     }
     for study in studies[1:]:
         figures[f"Fig. 4, parameter set {study.params.name}"] = (study.fig4(), f"fig4-{study.params.name}.png")
+    all_maps = [compute_maps(study.params, executor) for study in studies]
+    for maps in all_maps:
+        figures.update(maps_figures(maps))
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step))
+    out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, all_maps))
     return [*paths, out]
 

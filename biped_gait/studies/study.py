@@ -63,12 +63,11 @@ def run_study(
     cases: Sequence[tuple[float, float]] = TABLE_CASES,
     curves: bool = True,
     coarse_step: float = COARSE_STEP,
-    seed_period: float | None = PAPER_PERIOD,
 ) -> list[Study]:
     """Compute the study for each parameter set, all tasks at once on ``executor``, with a
     progress bar on stderr. ``cases`` are the (L, T) of the mode comparisons; ``curves`` adds
     the Fig. 4 sweep; ``coarse_step`` (rad) is the alpha spacing of sweeps and brackets;
-    gaits at other periods are reached by continuation in T from ``seed_period`` (s)."""
+    every chain starts from the gait the planner finds (atlas, continuation)."""
     studies = [Study(params) for params in params_sets]
     tasks = {}
     for study in studies:
@@ -76,7 +75,7 @@ def run_study(
             for chain in fig4_grid(study.params, coarse_step).chains():
                 tasks[executor.submit(run_chain, chain)] = (study, None)
         for case in cases:
-            future = executor.submit(compare_modes, study.params, *case, ALPHA_RANGE, coarse_step, seed_period)
+            future = executor.submit(compare_modes, study.params, *case, ALPHA_RANGE, coarse_step)
             tasks[future] = (study, case)
     with tqdm(total=len(tasks), unit="task", desc="study", file=sys.stderr) as bar:
         for future in as_completed(tasks):

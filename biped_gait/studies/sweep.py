@@ -2,13 +2,11 @@
 and gait mode, solved by continuation.
 
 The unit of work is a chain: one (L, T, mode) over the ascending alpha grid, each gait
-warm-started from its neighbour's solution; a gait that fails from the warm start is solved
-again cold, and the gait after a failure starts cold. The first gait starts cold, or, given
-a seed period T0, from a continuation in T from T0: Newton's method from the straight-line
-start finds the human-like gait near T = 0.45 s but not at every T (at L = 0.45 m,
-T = 0.50 s it finds a gait whose swing knee bends backwards). Chains run on any
-``concurrent.futures.Executor`` (``biped_gait.executors``). Failed and inadmissible gaits are
-results like the others (``converged``/``admissible``/``reasons``), never dropped.
+warm-started from its neighbour's solution. The first gait, a gait whose warm start fails, and
+the gait after a failure are found by the planner on the human-like branch (gait atlas, then
+continuation: ``GaitPlanner.plan``). Chains run on any ``concurrent.futures.Executor``
+(``studies.executors``). Failed and inadmissible gaits are results like the others
+(``converged``/``admissible``/``reasons``), never dropped.
 """
 
 from __future__ import annotations
@@ -52,28 +50,24 @@ def inclusive_range(start: float, stop: float, step: float, what: str) -> tuple[
 
 @dataclass(frozen=True)
 class Chain:
-    """One continuation chain: L (m), T (s), mode, the ascending alpha grid (rad), and the
-    seed period (s) its first gait is continued from (None: that gait starts cold)."""
+    """One continuation chain: L (m), T (s), mode and the ascending alpha grid (rad)."""
 
     params: BipedParams
     step_length: float
     period: float
     mode: str
     alphas: tuple[float, ...]
-    seed_period: float | None = None
 
 
 @dataclass(frozen=True)
 class SweepGrid:
-    """The cases of a sweep: every combination of L (m), T (s), mode and alpha (rad); each
-    chain's first gait continued in T from ``seed_period`` (s) if given."""
+    """The cases of a sweep: every combination of L (m), T (s), mode and alpha (rad)."""
 
     params: BipedParams
     step_lengths: tuple[float, ...]
     periods: tuple[float, ...]
     alphas: tuple[float, ...]
     modes: tuple[str, ...]
-    seed_period: float | None = None
 
     @classmethod
     def build(
@@ -83,7 +77,6 @@ class SweepGrid:
         periods: Sequence[float],
         alphas: Sequence[float],
         modes: Sequence[str],
-        seed_period: float | None = None,
         confirmed: bool = False,
     ) -> "SweepGrid":
         """Check and normalize a grid: duplicates removed, alphas ascending, mode names parsed.
@@ -101,14 +94,12 @@ class SweepGrid:
             periods=tuple(dict.fromkeys(float(v) for v in periods)),
             alphas=tuple(sorted(set(float(v) for v in alphas))),
             modes=tuple(dict.fromkeys(GaitMode.parse(m).value for m in modes)),
-            seed_period=seed_period,
         )
         if grid.size > MAX_CASES and not confirmed:
             raise ValueError(f"the sweep has {grid.size} cases (more than {MAX_CASES}): confirm to run it (--yes)")
         for chain in grid.chains():
-            for period in {chain.period} if chain.seed_period is None else {chain.period, chain.seed_period}:
-                for alpha in (chain.alphas[0], chain.alphas[-1]):
-                    validate_request(GaitRequest(chain.step_length, period, alpha, chain.mode), params)
+            for alpha in (chain.alphas[0], chain.alphas[-1]):
+                validate_request(GaitRequest(chain.step_length, chain.period, alpha, chain.mode), params)
         return grid
 
     @property
@@ -119,7 +110,7 @@ class SweepGrid:
     def chains(self) -> list[Chain]:
         """The continuation chains, in grid order (L, then T, then mode)."""
         return [
-            Chain(self.params, length, period, mode, self.alphas, self.seed_period)
+            Chain(self.params, length, period, mode, self.alphas)
             for length in self.step_lengths
             for period in self.periods
             for mode in self.modes
@@ -133,30 +124,18 @@ class SweepGrid:
             "period_s": list(self.periods),
             "arm_amplitude_deg": [round(math.degrees(a), 9) for a in self.alphas],
             "modes": list(self.modes),
-            "seed_period_s": self.seed_period,
             "cases": self.size,
         }
 
 
 def solve_near(planner: GaitPlanner, request: GaitRequest, guess: tuple[np.ndarray, float] | None) -> Gait:
-    """Solve from ``guess`` (a neighbour's solution); if that fails, solve again cold."""
-    result = planner.plan(request, guess=guess)
-    if guess is not None and not result.converged:
-        result = planner.plan(request)
-    return result
-
-
-def continue_in_period(
-    planner: GaitPlanner, step_length: float, period_from: float, period_to: float, alpha: float, mode: str
-) -> tuple[np.ndarray, float] | None:
-    """A warm start for the gait at ``period_to`` (s), reached by continuation in T from the
-    gait at ``period_from`` (solved cold) in steps of at most ``DEFAULTS.period_step``; L in m, alpha in
-    rad. None if the last gait before ``period_to`` fails."""
-    count = max(1, math.ceil(abs(period_to - period_from) / DEFAULTS.period_step))
-    guess = None
-    for period in np.linspace(period_from, period_to, count + 1)[:-1]:
-        guess = solve_near(planner, GaitRequest(step_length, float(period), alpha, mode), guess).warm_start()
-    return guess
+    """Solve from ``guess`` (a neighbour's solution); without one, or if that fails, let the
+    planner find the gait on the human-like branch."""
+    if guess is not None:
+        result = planner.plan(request, guess=guess)
+        if result.converged:
+            return result
+    return planner.plan(request)
 
 
 def solve_chain(
@@ -165,16 +144,13 @@ def solve_chain(
     period: float,
     mode: str,
     alphas: Sequence[float],
-    seed_period: float | None = None,
     on_result: Callable[[Gait], None] | None = None,
 ) -> list[Gait]:
-    """The gaits at L (m), T (s), mode over ascending ``alphas`` (rad), by continuation; the
-    first continued in T from ``seed_period`` (s) if given, else solved cold. ``on_result`` is
-    called with each gait as it is solved (an exception it raises stops the chain)."""
+    """The gaits at L (m), T (s), mode over ascending ``alphas`` (rad), by continuation from the
+    first, which the planner finds. ``on_result`` is called with each gait as it is solved (an
+    exception it raises stops the chain)."""
     results: list[Gait] = []
     guess = None
-    if seed_period is not None and seed_period != period:
-        guess = continue_in_period(planner, step_length, seed_period, period, alphas[0], mode)
     for alpha in alphas:
         result = solve_near(planner, GaitRequest(step_length, period, alpha, mode), guess)
         guess = result.warm_start()
@@ -186,9 +162,7 @@ def solve_chain(
 
 def run_chain(chain: Chain) -> list[Gait]:
     """Worker entry: solve one chain with this worker's planner; results without their samples."""
-    results = solve_chain(
-        planner_for(chain.params), chain.step_length, chain.period, chain.mode, chain.alphas, chain.seed_period
-    )
+    results = solve_chain(planner_for(chain.params), chain.step_length, chain.period, chain.mode, chain.alphas)
     return [result.without_samples() for result in results]
 
 

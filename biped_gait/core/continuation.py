@@ -1,0 +1,68 @@
+"""Natural-parameter continuation of the ballistic BVP along a straight path in (L, T, alpha):
+from a solved gait to a target request, each step warm-started from the last, the step halved
+where Newton fails or jumps to another branch. It follows the branch it starts on (the
+human-like one, when started from the atlas or the human-like seed).
+
+Steps solve only the shooting problem on the coarse grid (no impulses, no figures): the result
+is a warm start (qd(0) rad/s, theta rad) for the full solve at the target.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from .bvp import solve_bvp
+from .configurations import GaitMode
+from .flow import BallisticFlow
+from .hybrid import HybridStep
+from .settings import Settings
+
+MAX_STEP = 1.0  # grid spacings of the atlas (0.025 m, 0.025 s, 5 deg) per continuation step
+MIN_STEP = 1.0 / 64.0  # below this the path is given up
+BRANCH_JUMP = 2.0  # rad/s: a larger change of qd(0) in one step is a jump to another branch
+STEP_ITERATIONS = 12  # Newton iterations of one step: from a close warm start it needs 2 to 8
+EXTRA_ATTEMPTS = 24  # failed (halved) steps allowed on a path, beyond one per grid spacing
+SPACING = np.array([0.025, 0.025, math.radians(5.0)])  # m, s, rad
+
+
+def path_length(start: tuple[float, float, float], target: tuple[float, float, float]) -> float:
+    """Distance from ``start`` to ``target`` (L m, T s, alpha rad) in grid spacings."""
+    return float(np.linalg.norm((np.asarray(target) - np.asarray(start)) / SPACING))
+
+
+def continue_to(hybrid: HybridStep, flow: BallisticFlow, mode: GaitMode, closure: str, settings: Settings,
+                start: tuple[float, float, float], guess: tuple[np.ndarray, float],
+                target: tuple[float, float, float]) -> tuple[np.ndarray, float] | None:
+    """A warm start at ``target`` (L m, T s, alpha rad) reached from the gait ``guess`` =
+    (qd(0), theta) at ``start``; None if the path cannot be followed (a step below
+    ``MIN_STEP`` fails, or the steps exceed their budget). ``flow`` is the grid the steps are
+    solved on (the coarse one)."""
+    start_a, target_a = np.asarray(start, float), np.asarray(target, float)
+    length = path_length(start, target)
+    if length == 0.0:
+        return guess
+    coarse = replace(settings, tolerance=max(settings.tolerance, settings.coarse_tolerance),
+                     max_iterations=STEP_ITERATIONS)
+    s, ds = 0.0, min(1.0, MAX_STEP / length)
+    qd, theta = np.asarray(guess[0], float), float(guess[1])
+    attempts = math.ceil(length / MAX_STEP) + EXTRA_ATTEMPTS
+    while s < 1.0:
+        attempts -= 1
+        if attempts < 0:
+            return None
+        s_next = min(1.0, s + ds)
+        L, T, alpha = start_a + s_next * (target_a - start_a)
+        if not (0.0 < L < 2 * hybrid.bm.params.leg_length and T > 0 and 0 <= alpha < math.pi / 2):
+            return None
+        step = solve_bvp(hybrid, flow, float(L), float(T), float(alpha), mode, closure, (qd, theta), coarse)
+        if step.converged and np.max(np.abs(step.qd_a - qd)) <= BRANCH_JUMP:
+            s, qd, theta = s_next, step.qd_a, step.theta
+            ds = min(2.0 * ds, MAX_STEP / length)
+        else:
+            ds *= 0.5
+            if ds * length < MIN_STEP:
+                return None
+    return qd, theta

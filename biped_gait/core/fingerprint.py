@@ -1,0 +1,53 @@
+"""What a gait atlas is tied to: the parameter set and the model code it was computed with.
+
+``model_fingerprint`` hashes (SHA-256) the parameter set's values and the code of the core
+modules that decide a gait's solution and verdict: their syntax trees without docstrings (so a
+comment or a docstring does not make an atlas stale, a changed line of code does), the compiled
+flow's source, and the atlas format version.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+import json
+from dataclasses import asdict
+from functools import lru_cache
+from pathlib import Path
+
+from .params import BipedParams
+
+ATLAS_FORMAT = 1
+_CORE = Path(__file__).resolve().parent
+# The modules whose code decides a gait's solution and verdict.
+MODEL_CODE = ("model.py", "configurations.py", "rk8_tableau.py", "flow.py", "hybrid.py", "newton.py",
+              "bvp.py", "impulses.py", "reports.py", "admissibility.py", "settings.py", "native/flow.cpp")
+
+
+def _strip_docstrings(tree: ast.AST) -> ast.AST:
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
+                and isinstance(getattr(body[0], "value", None), ast.Constant) and isinstance(body[0].value.value, str):
+            node.body = body[1:] or [ast.Pass()]
+    return tree
+
+
+@lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """SHA-256 of the model code (``MODEL_CODE``), comments and docstrings left out."""
+    digest = hashlib.sha256(f"atlas format {ATLAS_FORMAT}\n".encode())
+    for name in MODEL_CODE:
+        text = (_CORE / name).read_text()
+        if name.endswith(".py"):
+            text = ast.dump(_strip_docstrings(ast.parse(text)))
+        digest.update(f"{name}\n{text}\n".encode())
+    return digest.hexdigest()
+
+
+def model_fingerprint(params: BipedParams) -> str:
+    """SHA-256 of ``params``' values (not its name) and of the model code."""
+    values = asdict(params)
+    values.pop("name")
+    text = json.dumps(values, sort_keys=True) + "\n" + code_fingerprint()
+    return hashlib.sha256(text.encode()).hexdigest()

@@ -1,0 +1,245 @@
+"""Maps of where walking is possible, per parameter set (beyond the paper, which studied three
+points): the admissible region in the (L, T) plane with the condition that limits each part of
+it, the lowest admissible period at each L, the optimal arm amplitude alpha*(L, T) and its
+effort W*(L, T), and the anti-normal / normal cost ratio at alpha*.
+
+The region comes from the gait atlas (normal gait, every alpha of the atlas): a node (L, T) is
+admissible if the gait is at some alpha; otherwise it is marked with the condition that limits
+it at the most alphas. The boundary T_min(L) is found by bisection along T on the human-like
+branch (at ``BOUNDARY_ALPHA``). The optima are computed by ``optimize.optimal_arm_amplitude``
+on every other atlas node of the admissible region, in parallel on an executor.
+L in m, T in s, alpha in rad (figures and text in degrees), W in N m s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import BoundaryNorm, ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+
+from ..core.admissibility import LIMIT_NAMES, Limit
+from ..core.atlas import Atlas, NodeStatus, atlas_path
+from ..core.configurations import GaitMode
+from ..core.params import BipedParams
+from ..core.planner import GaitRequest
+from .executors import planner_for
+from .optimize import NoAdmissibleGait, compare_modes
+
+BOUNDARY_ALPHA = math.radians(25.0)  # rad: near the optima of the default set
+ADMISSIBLE = "admissible"
+CATEGORIES = (ADMISSIBLE, *LIMIT_NAMES.values(), "backward-knee twin only")
+COLOURS = ("#4daf4a", "#999999", "#a65628", "#e41a1c", "#ff7f00", "#377eb8", "#984ea3", "#f781bf")
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """The optimal normal gait at (L, T): alpha* (rad), W* (N m s), and the anti-normal gait's
+    W at alpha* (NaN if it is not admissible)."""
+
+    step_length: float
+    period: float
+    alpha: float
+    W: float
+    anti_normal_W: float
+    interior: bool
+
+    @property
+    def ratio(self) -> float:
+        return self.anti_normal_W / self.W
+
+
+@dataclass(frozen=True)
+class WalkingMaps:
+    """The maps of one parameter set: the region per atlas (L, T) node (category names), the
+    boundary (L, T_min) pairs, and the optima on the coarser grid."""
+
+    params: str
+    step_lengths: np.ndarray
+    periods: np.ndarray
+    region: np.ndarray  # (L, T): index into CATEGORIES
+    boundary: list[tuple[float, float]]
+    optima: list[Optimum]
+
+
+def region(atlas: Atlas) -> np.ndarray:
+    """Per (L, T) node of ``atlas``: 0 if admissible at some alpha, else the index in
+    ``CATEGORIES`` of the condition that limits it at the most alphas."""
+    status, limits = atlas.nodes["status"], atlas.nodes["limits"]
+    out = np.zeros(status.shape[:2], dtype=int)
+    for i, j in np.ndindex(*out.shape):
+        if np.any(status[i, j] == NodeStatus.ADMISSIBLE):
+            continue
+        votes: Counter[str] = Counter()
+        for k in range(status.shape[2]):
+            if status[i, j, k] == NodeStatus.TWIN_ONLY:
+                votes[CATEGORIES[-1]] += 1
+            for bit, name in LIMIT_NAMES.items():
+                if status[i, j, k] != NodeStatus.TWIN_ONLY and Limit(int(limits[i, j, k])) & bit:
+                    votes[name] += 1
+        out[i, j] = CATEGORIES.index(votes.most_common(1)[0][0])
+    return out
+
+
+def boundary_period(params: BipedParams, mode: GaitMode, step_length: float, low: float, high: float,
+                    alpha: float = BOUNDARY_ALPHA, tol: float = 1e-3) -> float:
+    """The lowest admissible T (s) in [low, high] at L (m) and alpha (rad), by bisection on the
+    planner's verdict (``high`` admissible, ``low`` not), to ``tol`` s."""
+    planner = planner_for(params)
+    while high - low > tol:
+        middle = 0.5 * (low + high)
+        if planner.plan(GaitRequest(step_length, middle, alpha, mode)).admissible:
+            high = middle
+        else:
+            low = middle
+    return high
+
+
+def _optimum(params: BipedParams, step_length: float, period: float) -> Optimum | None:
+    """Worker entry: the optimum at (L, T) and the anti-normal gait there; None if no gait of
+    the range is admissible."""
+    try:
+        comparison = compare_modes(params, step_length, period)
+    except NoAdmissibleGait:
+        return None
+    normal, anti = comparison.normal, comparison.anti_normal
+    return Optimum(step_length, period, normal.alpha, normal.W, anti.W if anti.usable else math.nan, normal.interior)
+
+
+def compute_maps(params: BipedParams, executor: Executor, stride: int = 2) -> WalkingMaps:
+    """The maps of ``params`` from its current normal-gait atlas; optima on every ``stride``-th
+    node of the admissible region, on ``executor``."""
+    atlas = Atlas.load(atlas_path(params, GaitMode.NORMAL), params)
+    grid = atlas.grid
+    cells = region(atlas)
+    boundary_tasks = {}
+    for i, length in enumerate(grid.step_lengths):
+        row = np.flatnonzero(cells[i] == 0)
+        if row.size and row[0] > 0:
+            boundary_tasks[float(length)] = executor.submit(
+                boundary_period, params, GaitMode.NORMAL, float(length), float(grid.periods[row[0] - 1]),
+                float(grid.periods[row[0]]))
+    optimum_tasks = [executor.submit(_optimum, params, float(grid.step_lengths[i]), float(grid.periods[j]))
+                     for i in range(0, len(grid.step_lengths), stride) for j in range(0, len(grid.periods), stride)
+                     if cells[i, j] == 0]
+    boundary = [(length, future.result()) for length, future in boundary_tasks.items()]
+    optima = [o for o in (f.result() for f in optimum_tasks) if o is not None]
+    return WalkingMaps(params.name, grid.step_lengths, grid.periods, cells, boundary, optima)
+
+
+# Figures -------------------------------------------------------------------------------------
+
+def _figure(columns: int = 1) -> tuple[Figure, list]:
+    fig = Figure(figsize=(5.2 * columns, 4.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig, [fig.add_subplot(1, columns, c + 1) for c in range(columns)]
+
+
+def _edges(values: np.ndarray) -> np.ndarray:
+    step = np.diff(values).mean()
+    return np.concatenate([values - step / 2, [values[-1] + step / 2]])
+
+
+def region_figure(maps: WalkingMaps) -> Figure:
+    """The admissible region in the (L, T) plane, each node coloured by its limiting condition,
+    with the boundary T_min(L) at alpha = 25 deg."""
+    fig, [ax] = _figure()
+    present = sorted(set(maps.region.ravel().tolist()))
+    cmap = ListedColormap(list(COLOURS))
+    ax.pcolormesh(_edges(maps.step_lengths), _edges(maps.periods), maps.region.T, cmap=cmap,
+                  norm=BoundaryNorm(np.arange(len(CATEGORIES) + 1) - 0.5, len(CATEGORIES)))
+    handles = [Patch(color=COLOURS[c], label=CATEGORIES[c]) for c in present]
+    if maps.boundary:
+        lengths, periods = zip(*maps.boundary)
+        (line,) = ax.plot(lengths, periods, "k.-", label=f"lowest admissible T, alpha = {math.degrees(BOUNDARY_ALPHA):g} deg")
+        handles.append(line)
+    ax.set_xlabel("step length L (m)")
+    ax.set_ylabel("period T (s)")
+    ax.set_title(f"Where walking is possible, params {maps.params}\n(normal gait, some alpha in [0, 45] deg)",
+                 fontsize="medium")
+    ax.legend(handles=handles, fontsize="small", loc="upper left", framealpha=0.9)
+    return fig
+
+
+def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure) -> None:
+    lengths = [o.step_length for o in maps.optima]
+    periods = [o.period for o in maps.optima]
+    points = ax.scatter(lengths, periods, c=values, s=260, marker="s", cmap="viridis")
+    for x, y, v in zip(lengths, periods, values):
+        ax.annotate(f"{v:.1f}" if math.isfinite(v) else "-", (x, y), ha="center", va="center", fontsize=6, color="white")
+    fig.colorbar(points, ax=ax, label=label)
+    ax.set_xlabel("step length L (m)")
+    ax.set_ylabel("period T (s)")
+
+
+def optimum_figure(maps: WalkingMaps) -> Figure:
+    """alpha*(L, T) (deg) and W*(L, T) (N m s) of the normal gait over the admissible region."""
+    fig, (left, right) = _figure(2)
+    _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima], "optimal arm amplitude alpha* (deg)", fig)
+    _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig)
+    left.set_title(f"alpha*(L, T), params {maps.params}", fontsize="medium")
+    right.set_title(f"W*(L, T), params {maps.params}", fontsize="medium")
+    return fig
+
+
+def ratio_figure(maps: WalkingMaps) -> Figure:
+    """W of the anti-normal gait over W of the normal gait, both at the normal gait's alpha*."""
+    fig, [ax] = _figure()
+    _scatter_map(ax, maps, [o.ratio for o in maps.optima], "W anti-normal / W normal at alpha*", fig)
+    ax.set_title(f"Cost of the anti-normal arm swing, params {maps.params}", fontsize="medium")
+    return fig
+
+
+# Reading ---------------------------------------------------------------------------------------
+
+def reading(maps: WalkingMaps) -> list[str]:
+    """A short reading of the maps, from their numbers (Markdown bullet lines)."""
+    lines = []
+    total = maps.region.size
+    admissible = int(np.sum(maps.region == 0))
+    limits = Counter(CATEGORIES[c] for c in maps.region.ravel() if c != 0)
+    limit_text = ", ".join(f"{name} at {n}" for name, n in limits.most_common()) or "none"
+    lines.append(f"- **Region.** {admissible} of {total} (L, T) nodes of the atlas (L {maps.step_lengths[0]:g} to "
+                 f"{maps.step_lengths[-1]:g} m, T {maps.periods[0]:g} to {maps.periods[-1]:g} s) have an admissible "
+                 f"normal gait at some alpha in [0, 45] deg. Where none is, the limit is: {limit_text} nodes.")
+    if maps.boundary:
+        periods = np.array([t for _, t in maps.boundary])
+        lines.append(f"- **Lowest admissible period** at alpha = {math.degrees(BOUNDARY_ALPHA):g} deg: T_min from "
+                     f"{periods.min():.3f} to {periods.max():.3f} s over L = {maps.boundary[0][0]:g} to "
+                     f"{maps.boundary[-1][0]:g} m (bisection to 1 ms). Below it the human-like branch goes on, but its "
+                     "swing knee bends backwards during the step.")
+    if maps.optima:
+        alphas = np.degrees([o.alpha for o in maps.optima])
+        efforts = np.array([o.W for o in maps.optima])
+        best = maps.optima[int(np.argmin(efforts))]
+        interior = sum(o.interior for o in maps.optima)
+        lines.append(f"- **Optimal arm swing.** alpha* ranges from {alphas.min():.1f} to {alphas.max():.1f} deg over "
+                     f"{len(maps.optima)} (L, T) points ({interior} interior minima); W* from {efforts.min():.2f} to "
+                     f"{efforts.max():.2f} N m s, least at L = {best.step_length:g} m, T = {best.period:g} s. "
+                     + _trend(maps.optima))
+        ratios = np.array([o.ratio for o in maps.optima])
+        finite = ratios[np.isfinite(ratios)]
+        if finite.size:
+            lines.append(f"- **Anti-normal swing** costs {finite.min():.3f} to {finite.max():.3f} times the normal "
+                         f"gait's W at alpha* ({int(np.sum(finite > 1))} of {finite.size} points above 1"
+                         + (f"; {ratios.size - finite.size} anti-normal gaits not admissible" if finite.size < ratios.size else "")
+                         + ").")
+    return lines
+
+
+def _trend(optima: Sequence[Optimum]) -> str:
+    """How alpha* moves with L at fixed T and with T at fixed L (least-squares slopes)."""
+    lengths = np.array([o.step_length for o in optima])
+    periods = np.array([o.period for o in optima])
+    alphas = np.degrees([o.alpha for o in optima])
+    design = np.column_stack([lengths, periods, np.ones_like(lengths)])
+    (d_length, d_period, _), *_ = np.linalg.lstsq(design, alphas, rcond=None)
+    return (f"A plane fitted to alpha*(L, T) has slopes {d_length * 0.1:+.2f} deg per 0.1 m of L and "
+            f"{d_period * 0.1:+.2f} deg per 0.1 s of T.")

@@ -1,0 +1,134 @@
+"""The gait atlas and the planner that starts from it: coverage (every request where
+continuation from the human-like seed finds an admissible gait is answered admissible, with the
+same W; the others are refused with the limiting reason and a hint), the shipped atlases are
+current, an atlas round-trips through its file, and a stale or corrupt file is refused."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import zipfile
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+from biped_gait.core.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path
+from biped_gait.core.configurations import GaitMode
+from biped_gait.core.continuation import continue_to
+from biped_gait.core.params import load_params, shipped_param_names
+from biped_gait.core.planner import SEED, GaitPlanner, GaitRequest
+from biped_gait.studies.atlas_build import build_atlas
+
+from .test_cli import run
+
+pytestmark = pytest.mark.core
+
+# Off-grid requests of the tests' own choosing: (L m, T s, alpha deg).
+COVERAGE = [(L, T, a) for L in (0.33, 0.47, 0.58) for T in (0.37, 0.415, 0.52, 0.61) for a in (7.0, 33.0)]
+
+
+def by_continuation(planner: GaitPlanner, mode: GaitMode, L: float, T: float, alpha: float):
+    """The reference: the gait at (L, T, alpha) continued from the human-like seed, no atlas."""
+    seed = planner.plan(GaitRequest(*SEED, mode), cold=True)
+    guess = continue_to(planner.hybrid, planner.coarse_flow, mode, "theta", planner.settings, SEED, seed.warm_start(),
+                        (L, T, alpha))
+    return None if guess is None else planner.plan(GaitRequest(L, T, alpha, mode), guess)
+
+
+@pytest.mark.parametrize("mode", list(GaitMode))
+def test_every_gait_continuation_finds_is_answered(planner, mode):
+    answered = feasible = 0
+    for L, T, alpha_deg in COVERAGE:
+        alpha = math.radians(alpha_deg)
+        reference = by_continuation(planner, mode, L, T, alpha)
+        gait = planner.plan(GaitRequest(L, T, alpha, mode))
+        if reference is not None and reference.admissible:
+            feasible += 1
+            assert gait.admissible, (L, T, alpha_deg, gait.reasons)
+            assert gait.W == pytest.approx(reference.W, rel=1e-6), (L, T, alpha_deg)
+            assert gait.found == "atlas", (L, T, alpha_deg, gait.found)
+            answered += 1
+        else:
+            assert not gait.admissible and gait.reasons, (L, T, alpha_deg)
+            assert gait.hint.startswith("nearest admissible"), gait.hint
+            if reference is not None:  # the same human-like gait, limited by the same conditions
+                assert gait.verdict.limits == reference.verdict.limits, (L, T, alpha_deg)
+    print(f"\n{mode.value}: answered {answered} of {feasible} feasible requests ({len(COVERAGE)} asked)")
+    assert feasible >= len(COVERAGE) // 2
+
+
+def test_the_users_examples_are_admissible_human_like_gaits():
+    for args in (["--period", "0.55"], ["--step-length", "0.42", "--period", "0.5", "--arm-amplitude", "23.6"]):
+        proc = run("plan", *args)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        assert "admissible True" in proc.stdout and "found by atlas" in proc.stdout
+    proc = run("optimize-arms", "--step-length", "0.42", "--period", "0.50")
+    assert proc.returncode == 0 and "an interior minimum of W" in proc.stdout, proc.stdout + proc.stderr
+
+
+def test_a_refusal_says_why_and_where_admissible_gaits_are(planner):
+    gait = planner.plan(GaitRequest(0.45, 0.35, math.radians(23.5)))
+    assert not gait.admissible and "swing knee bends backwards" in gait.reasons[0]
+    assert gait.hint.startswith("nearest admissible (atlas grid): T in [")
+    assert gait.found in ("atlas", "continuation")
+
+
+@pytest.mark.parametrize("name", shipped_param_names())
+def test_the_shipped_atlases_are_current(name):
+    params = load_params(name)
+    for mode in GaitMode:
+        atlas = Atlas.load(atlas_path(params, mode), params, name)
+        counts = atlas.counts()
+        assert counts["admissible"] > 0.4 * sum(counts.values()), counts
+        assert atlas.grid.step_lengths[0] <= 0.25 and atlas.grid.step_lengths[-1] >= 0.65
+        assert atlas.grid.periods[0] <= 0.30 and atlas.grid.periods[-1] >= 0.65
+        assert atlas.grid.alphas[0] == 0.0 and math.degrees(atlas.grid.alphas[-1]) >= 45.0 - 1e-9
+
+
+@pytest.fixture(scope="module")
+def small_atlas() -> Atlas:
+    """An atlas on a small grid around the seed, built by the real builder (threads)."""
+    grid = Grid(np.array([0.40, 0.45, 0.50]), np.array([0.375, 0.45, 0.525]), np.radians([20.0, 25.0]))
+    with ThreadPoolExecutor(2) as executor:
+        return build_atlas(load_params(), GaitMode.NORMAL, executor, grid)
+
+
+def test_an_atlas_round_trips_through_its_file(small_atlas, tmp_path):
+    assert small_atlas.status((1, 1, 0)) == NodeStatus.ADMISSIBLE
+    assert small_atlas.status((1, 0, 0)) == NodeStatus.INADMISSIBLE  # T = 0.375: the knee limits it
+    path = small_atlas.save(tmp_path / "a.npz")
+    back = Atlas.load(path, load_params(), "aoustin2013")
+    assert (back.params, back.mode, back.fingerprint, back.friction) == (
+        small_atlas.params, small_atlas.mode, small_atlas.fingerprint, small_atlas.friction)
+    for name, array in small_atlas.nodes.items():
+        assert np.array_equal(array, back.nodes[name], equal_nan=True), name
+    guess = back.guess((0.45, 0.45, math.radians(22.5)))
+    assert guess is not None and np.all(np.isfinite(guess[0]))
+
+
+def test_a_corrupt_or_stale_atlas_is_refused_with_the_rebuild_command(small_atlas, tmp_path):
+    params = load_params()
+    corrupt = tmp_path / "corrupt.npz"
+    corrupt.write_bytes(b"PK\x03\x04 not an archive")
+    with pytest.raises(AtlasError, match="unreadable: rebuild it with `biped-gait atlas build --params aoustin2013`"):
+        Atlas.load(corrupt, params, "aoustin2013")
+    truncated = tmp_path / "truncated.npz"
+    truncated.write_bytes(small_atlas.save(tmp_path / "whole.npz").read_bytes()[:500])
+    with pytest.raises(AtlasError, match="unreadable"):
+        Atlas.load(truncated, params, "aoustin2013")
+    path = small_atlas.save(tmp_path / "a.npz")
+    other = dataclasses.replace(params, friction=0.8)
+    with pytest.raises(AtlasError, match=r"stale \(built for other parameters or model code\): rebuild it with "
+                                         r"`biped-gait atlas build --params my.yaml`"):
+        Atlas.load(path, other, "my.yaml")
+    with pytest.raises(AtlasError, match="no gait atlas at"):
+        Atlas.load(tmp_path / "missing.npz", params)
+    assert zipfile.is_zipfile(path)
+
+
+def test_without_an_atlas_the_planner_continues_from_the_seed():
+    planner = GaitPlanner(atlas=False)
+    gait = planner.plan(GaitRequest(0.45, 0.55, math.radians(23.5)))
+    assert gait.admissible and gait.found == "continuation" and gait.figures.q9_min >= -1e-9
+    assert not gait.hint
