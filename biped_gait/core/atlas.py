@@ -141,24 +141,26 @@ class Atlas:
         return NodeStatus(int(self.nodes["status"][index]))
 
     def guess(self, point: tuple[float, float, float]) -> tuple[np.ndarray, float] | None:
-        """A warm start (qd(0), theta) at (L m, T s, alpha rad) inside the grid: multilinear
-        interpolation of the cell's corners when all are on the branch, else the nearest
-        corner on the branch; None outside the grid or without such a corner."""
+        """A warm start (qd(0), theta) at (L m, T s, alpha rad) inside the grid: Catmull-Rom
+        (cubic) interpolation of the 4 x 4 x 4 nodes around it when all are on the branch (linear
+        along an axis at the grid's edge), else multilinear interpolation of the cell's 8 corners
+        when those are, else the nearest corner on the branch; None outside the grid or without
+        such a corner."""
         if not self.grid.contains(point):
             return None
+        for cubic in (True, False):
+            stencil = [_weights(axis, x, cubic) for axis, x in zip(self.grid.axes, point)]
+            block = np.ix_(*(indices for indices, _ in stencil))
+            if np.all(np.isin(self.nodes["status"][block], ON_BRANCH)):
+                w0, w1, w2 = (weights for _, weights in stencil)
+                qd = np.einsum("i,j,k,ijkn->n", w0, w1, w2, self.nodes["qd_a"][block])
+                return qd, float(np.einsum("i,j,k,ijk->", w0, w1, w2, self.nodes["theta"][block]))
         lower, frac = self.grid.cell(point)
         corners = [(tuple(l + o for l, o in zip(lower, offset)), offset) for offset in np.ndindex(2, 2, 2)]
         on_branch = [(idx, off) for idx, off in corners if self.status(idx) in ON_BRANCH]
         if not on_branch:
             return None
-        if len(on_branch) == len(corners):
-            qd, theta = np.zeros(9), 0.0
-            for idx, off in corners:
-                weight = float(np.prod([f if o else 1.0 - f for f, o in zip(frac, off)]))
-                qd += weight * self.nodes["qd_a"][idx]
-                theta += weight * float(self.nodes["theta"][idx])
-            return qd, theta
-        idx = min(on_branch, key=lambda c: float(np.sum(((np.array(c[1]) - frac)) ** 2)))[0]
+        idx = min(on_branch, key=lambda c: float(np.sum((np.array(c[1]) - frac) ** 2)))[0]
         return self.nodes["qd_a"][idx].copy(), float(self.nodes["theta"][idx])
 
     def admissible_near(self, point: tuple[float, float, float]) -> bool:
@@ -246,6 +248,18 @@ class Atlas:
                 raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`")
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
                    float(meta.get("build_seconds", math.nan)))
+
+
+def _weights(axis: np.ndarray, x: float, cubic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Node indices along ``axis`` and their interpolation weights at ``x``: Catmull-Rom over
+    four nodes (``cubic``, where the axis has a node on each side of the cell), else linear."""
+    i = int(np.clip(np.searchsorted(axis, x, side="right") - 1, 0, len(axis) - 2))
+    t = float(np.clip((x - axis[i]) / (axis[i + 1] - axis[i]), 0.0, 1.0))
+    if cubic and 0 < i < len(axis) - 2:
+        t2, t3 = t * t, t * t * t
+        weights = np.array([-t3 + 2 * t2 - t, 3 * t3 - 5 * t2 + 2, -3 * t3 + 4 * t2 + t, t3 - t2]) / 2
+        return np.arange(i - 1, i + 3), weights
+    return np.array([i, i + 1]), np.array([1.0 - t, t])
 
 
 def cache_dir() -> Path:

@@ -147,17 +147,29 @@ def solve_chain(
     on_result: Callable[[Gait], None] | None = None,
 ) -> list[Gait]:
     """The gaits at L (m), T (s), mode over ascending ``alphas`` (rad), by continuation from the
-    first, which the planner finds. ``on_result`` is called with each gait as it is solved (an
-    exception it raises stops the chain)."""
+    first, which the planner finds; each warm start extrapolated (secant) from the two gaits
+    before it. ``on_result`` is called with each gait as it is solved (an exception it raises
+    stops the chain)."""
     results: list[Gait] = []
-    guess = None
-    for alpha in alphas:
-        result = solve_near(planner, GaitRequest(step_length, period, alpha, mode), guess)
-        guess = result.warm_start()
+    for k, alpha in enumerate(alphas):
+        result = solve_near(planner, GaitRequest(step_length, period, alpha, mode), predict(results, alphas[:k], alpha))
         results.append(result)
         if on_result is not None:
             on_result(result)
     return results
+
+
+def predict(results: Sequence[Gait], alphas: Sequence[float], alpha: float) -> tuple[np.ndarray, float] | None:
+    """The warm start at ``alpha`` from the chain's gaits so far (at ``alphas``, rad): the secant
+    through the last two if both converged, else the last one's solution, else None."""
+    if not results or not results[-1].converged:
+        return None
+    last = results[-1].warm_start()
+    if len(results) < 2 or not results[-2].converged:
+        return last
+    before = results[-2].warm_start()
+    ratio = (alpha - alphas[-1]) / (alphas[-1] - alphas[-2])
+    return last[0] + ratio * (last[0] - before[0]), last[1] + ratio * (last[1] - before[1])
 
 
 def run_chain(chain: Chain) -> list[Gait]:

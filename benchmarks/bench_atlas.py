@@ -1,0 +1,98 @@
+"""Benchmark: the planner with the gait atlas against the cold solve, and the Fig. 4 study.
+
+1. ``plan`` on random requests inside the atlas (L 0.25..0.65 m, T 0.30..0.65 s, alpha 0..45
+   deg, both modes; fixed seed): median solve time from the atlas against the cold solve
+   (``plan(..., cold=True)``: the straight-line start, what ``plan`` did before the atlas) of the
+   same requests, in the same run; how each gait was found; how many cold solves end on the
+   backward-knee twin or nowhere while the atlas answers.
+2. The Fig. 4 study (186 gaits, six chains) on local worker processes, beside the time of 25
+   cold solves measured in the same run (the yardstick of issue 10).
+3. The shipped atlases: build time (recorded when built) and file size.
+
+    .venv/bin/python benchmarks/bench_atlas.py [--requests N] [--workers N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import time
+import warnings
+
+import numpy as np
+
+from biped_gait.core.atlas import Atlas, atlas_path
+from biped_gait.core.configurations import GaitMode
+from biped_gait.core.params import load_params, shipped_param_names
+from biped_gait.core.planner import GaitPlanner, GaitRequest
+from biped_gait.studies.executors import check_workers, open_executor
+from biped_gait.studies.study import fig4_grid
+from biped_gait.studies.sweep import solve_grid
+
+
+def random_requests(count: int, seed: int = 7) -> list[GaitRequest]:
+    rng = np.random.default_rng(seed)
+    return [GaitRequest(float(rng.uniform(0.25, 0.65)), float(rng.uniform(0.30, 0.65)),
+                        float(np.radians(rng.uniform(0.0, 45.0))), list(GaitMode)[i % 2]) for i in range(count)]
+
+
+def timed(call):
+    start = time.perf_counter()
+    result = call()
+    return time.perf_counter() - start, result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--requests", type=int, default=60)
+    parser.add_argument("--workers", type=int, help="local worker processes for the study (default: one per core)")
+    args = parser.parse_args()
+    warnings.simplefilter("error")  # a missing or stale atlas would make this benchmark meaningless
+    planner = GaitPlanner()
+    requests = random_requests(args.requests)
+    planner.plan(requests[0])
+    planner.plan(requests[1])  # both atlases loaded, first-call costs out of the way
+    atlas_times, cold_times, found = [], [], {}
+    admissible = cold_wrong = 0
+    for request in requests:
+        dt, gait = timed(lambda: planner.plan(request))
+        atlas_times.append(dt)
+        found[gait.found] = found.get(gait.found, 0) + 1
+        dt, cold = timed(lambda: planner.plan(request, cold=True))
+        cold_times.append(dt)
+        if gait.admissible:
+            admissible += 1
+            cold_wrong += not cold.admissible
+    ms = lambda xs: 1e3 * statistics.median(xs)  # noqa: E731
+    print(f"plan on {len(requests)} random requests inside the atlas (both modes):")
+    print(f"  from the atlas: median {ms(atlas_times):7.2f} ms   p90 {1e3 * np.percentile(atlas_times, 90):7.2f} ms   "
+          f"found by {found}")
+    print(f"  cold solve:     median {ms(cold_times):7.2f} ms   (the same requests, this run)")
+    print(f"  ratio cold / atlas: {statistics.median(cold_times) / statistics.median(atlas_times):.2f}x")
+    print(f"  {admissible} requests admissible; the cold solve is not admissible for {cold_wrong} of them "
+          "(backward-knee twin or no convergence)")
+
+    yardstick = [timed(lambda: planner.plan(GaitRequest(0.45, 0.45, math.radians(a)), cold=True))[0]
+                 for a in np.linspace(10.0, 34.0, 25)]
+    workers = check_workers(args.workers)
+    grid = fig4_grid(load_params())
+    start = time.perf_counter()
+    with open_executor(workers) as executor:
+        results = [r for _, chain in solve_grid(grid, executor) for r in chain]
+    study = time.perf_counter() - start
+    assert len(results) == grid.size and all(r.admissible for r in results)
+    print(f"Fig. 4 study: {grid.size} gaits on {workers} worker processes: {study:.2f} s wall "
+          f"(25 cold solves in this run: {sum(yardstick):.2f} s; ratio {study / sum(yardstick):.2f})")
+
+    for name in shipped_param_names():
+        params = load_params(name)
+        for mode in GaitMode:
+            path = atlas_path(params, mode)
+            atlas = Atlas.load(path, params, name)
+            print(f"atlas {name} {mode.value}: built in {atlas.build_seconds:.0f} s, {path.stat().st_size / 1e6:.2f} MB, "
+                  f"{sum(atlas.counts().values())} nodes {atlas.counts()}")
+
+
+if __name__ == "__main__":
+    main()
