@@ -7,7 +7,7 @@ warm start of a solve nearby), its status (admissible; inadmissible on the branc
 conditions that limit it; only the backward-knee twin converges; nothing converges), and the
 figures the studies and maps use: W (N m s), min vertical ground reaction (N), min swing
 height (m), max friction ratio, min swing-knee angle q9 (rad), yaw angular momenta at T- and T+
-(kg m^2/s). An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``:
+(kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``:
 a stale or unreadable file is refused with a one-line message that says how to rebuild it.
 
 Files are compressed NumPy archives (``.npz``, no pickles). The shipped atlases are package data
@@ -43,7 +43,7 @@ NODE_ARRAYS = {
     "status": ((), np.uint8), "limits": ((), np.uint8), "qd_a": ((9,), np.float64), "theta": ((), np.float64),
     "W": ((), np.float64), "min_grf_z": ((), np.float64), "min_swing_height": ((), np.float64),
     "max_friction_ratio": ((), np.float64), "q9_min": ((), np.float64), "h_t_minus": ((2,), np.float64),
-    "h_t_plus": ((2,), np.float64),
+    "h_t_plus": ((2,), np.float64), "spectral_radius": ((), np.float64),
 }
 
 

@@ -20,6 +20,7 @@ from .configurations import GaitMode
 from .gait_views import summary, to_dict, to_json
 from .impulses import ImpulseSolution
 from .reports import StepFigures
+from .stability import Multipliers
 
 
 @dataclass(frozen=True)
@@ -66,7 +67,9 @@ class Gait:
     converged; the ``verdict``; the solve's wall time (s); how it was ``found`` (``guess``: from
     the caller's warm start, ``atlas``: from the atlas's interpolated warm start,
     ``continuation``: by continuation from the nearest admissible gait, ``cold``: from the
-    straight-line start); and, when it is not admissible, a ``hint`` of where admissible gaits are."""
+    straight-line start); and, when it is not admissible, a ``hint`` of where admissible gaits are;
+    the open-loop Floquet multipliers of its Poincare map (``stability``, when the double support
+    was solved)."""
 
     problem: GaitProblem
     step: BvpSolution
@@ -76,6 +79,7 @@ class Gait:
     solve_time_s: float
     found: str = "cold"
     hint: str = ""
+    stability: Multipliers | None = None
 
     # The request's figures, as every user of a gait reads them.
     step_length = property(lambda self: self.problem.step_length, doc="L (m)")

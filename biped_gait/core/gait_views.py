@@ -124,6 +124,10 @@ FIELDS: tuple[Field, ...] = (
     Field("lp_duality_gap", _impulse("duality_gap", NAN)),
     Field("energy_drift", _figure("energy_drift")),
     Field("dynamics_evaluations", lambda g: g.step.evaluations),
+    Field("multipliers", lambda g: [[v.real, v.imag] for v in g.stability.values] if g.stability else []),
+    Field("multiplier_moduli", lambda g: np.abs(g.stability.values) if g.stability else [], "multiplier_moduli"),
+    Field("spectral_radius", lambda g: g.stability.spectral_radius if g.stability else NAN, "spectral_radius"),
+    Field("open_loop_stable", lambda g: g.stability.stable if g.stability else False, "open_loop_stable"),
     Field("solve_time_s", lambda g: g.solve_time_s, "solve_time"),
     Field("trajectory", _trajectory),
 )
@@ -186,5 +190,9 @@ def summary(gait: "Gait") -> str:
             f"impact eqs {d['impact_equation_residual']:.1e}, LP duality {d['lp_duality_gap']:.1e}, "
             f"energy drift {d['energy_drift']:.1e}",
         ]
+    if gait.stability is not None:
+        moduli = ", ".join(f"{m:.3g}" for m in np.abs(gait.stability.values[:6]))
+        lines.append(f"open-loop Floquet multipliers |lambda| {moduli}, ...: spectral radius "
+                     f"{gait.stability.spectral_radius:.4g}, {'stable' if gait.stability.stable else 'unstable'}")
     lines.append(f"solve time {gait.solve_time_s * 1000:.1f} ms, {d['dynamics_evaluations']} dynamics evaluations")
     return "\n".join(lines)

@@ -140,12 +140,35 @@ class ImpactMap:
         xd_b = np.concatenate([np.zeros(3), qd_b])
         return float(self.locked_rotation @ self.mass_matrix @ (self.next_step_velocity(qd_a) - xd_b))
 
+    def forward(self, qd_b: np.ndarray, i_minus: np.ndarray, i_plus: np.ndarray) -> np.ndarray:
+        """The next step's initial joint velocity (its own coordinates, rad/s) when this step
+        ends with ``qd_b`` and the double support applies the joint impulses ``i_minus`` and
+        ``i_plus`` (N m s, q3..q9) around the passive impact: eqs. (6)-(10) run forward as three
+        impacts, the old stance tip keeping its velocity through I^-, the new one at rest after
+        the impact and after I^+; then the leg exchange."""
+        xd_b = np.concatenate([np.zeros(3), qd_b])
+        xd_minus = impact_with(self.mass_matrix, self.j1, xd_b, i_minus, at_rest=False)
+        xd_plus = impact_with(self.mass_matrix, self.j2, xd_minus, np.zeros(7), at_rest=True)
+        xd_a = impact_with(self.mass_matrix, self.j2, xd_plus, i_plus, at_rest=True)
+        return exchange(xd_a[3:])
+
     def closure_gradients(self) -> tuple[np.ndarray, np.ndarray]:
         """d gap / d qd_a (in the next step's coordinates) and d gap / d qd_b, at this
         configuration (the gap is linear in both)."""
         row = self.momentum_row
         d_a = (row[3:] - row[:3] @ self.j2[:, 3:]) @ P_INVERSE
         return d_a, -row[3:]
+
+
+def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, joint_impulse: np.ndarray,
+                at_rest: bool) -> np.ndarray:
+    """The extended velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R with
+    the contact point of ``contact`` (J, 3 x 12) at rest after it (``at_rest``) or keeping its
+    velocity (J Xd' = J Xd); ``joint_impulse`` I on q3..q9 (N m s)."""
+    kkt = np.block([[mass_matrix, -contact.T], [contact, np.zeros((3, 3))]])
+    rhs = np.concatenate([mass_matrix @ xd, np.zeros(3) if at_rest else contact @ xd])
+    rhs[5:12] += joint_impulse
+    return np.linalg.solve(kkt, rhs)[:12]
 
 
 class HybridStep:

@@ -33,6 +33,7 @@ from .model import BipedModel
 from .params import BipedParams, load_params
 from .reports import StepFigures, StepTrajectory, energy_drift, step_figures
 from .settings import DEFAULTS, Settings
+from .stability import open_loop
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
 BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm start left the branch
@@ -190,7 +191,11 @@ class GaitPlanner:
             double_support = self._double_support(step, problem)
             figures = self._figures(step, problem.period)
         verdict = judge(step, double_support.impulses if double_support else None, figures, self.params.friction)
-        return Gait(problem, step, double_support, figures, verdict, math.nan, found)
+        stability = None
+        if double_support is not None and double_support.impulses.success:
+            stability = open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
+                                  double_support.impulses.i_minus, double_support.impulses.i_plus)
+        return Gait(problem, step, double_support, figures, verdict, math.nan, found, stability=stability)
 
     def _double_support(self, step: BvpSolution, problem: GaitProblem) -> DoubleSupport:
         bm = self.model

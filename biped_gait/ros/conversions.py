@@ -92,6 +92,8 @@ def plan_msg(gait: Gait, header) -> GaitPlan:
             value = Vector3(x=x, y=y, z=z)
         elif f.size is not None:
             value = _fixed(value, f.size)
+        elif isinstance(value, np.ndarray):
+            value = [float(v) for v in value]
         setattr(msg, f.msg, value)
     msg.trajectory.header = header
     return msg

@@ -58,6 +58,8 @@ def node_record(gait: Gait | None, on_branch: bool) -> dict[str, object]:
                       max_friction_ratio=f.max_friction_ratio, q9_min=f.q9_min)
     if gait.double_support is not None:
         record.update(h_t_minus=gait.double_support.h_t_minus, h_t_plus=gait.double_support.h_t_plus)
+    if gait.stability is not None:
+        record["spectral_radius"] = gait.stability.spectral_radius
     return record
 
 

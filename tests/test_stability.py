@@ -1,0 +1,73 @@
+"""Floquet stability of a gait: the open-loop multipliers from the variational equations agree
+with finite differences of the Poincare map, a perturbation grows at the predicted rate, and the
+walker's closed loop (impulses re-solved, steps re-aimed) decays at its own predicted rate."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from biped_gait.core.stability import PoincareMap, closed_loop, multipliers_of
+from biped_gait.core.walk import PlannedOrbit, Walker
+
+pytestmark = pytest.mark.core
+
+
+@pytest.fixture(scope="module")
+def poincare(planner, default_gait) -> PoincareMap:
+    impulses = default_gait.double_support.impulses
+    return PoincareMap(planner.hybrid, planner.flow, default_gait.period, impulses.i_minus, impulses.i_plus)
+
+
+def start(gait) -> np.ndarray:
+    return np.concatenate([gait.step.q0, gait.step.qd_a])
+
+
+def test_the_gait_is_a_fixed_point_and_its_multipliers_match_finite_differences(poincare, default_gait):
+    x0 = start(default_gait)
+    assert np.max(np.abs(poincare(x0) - x0)) < 1e-10
+    h = 1e-7
+    columns = [(poincare(x0 + h * e) - poincare(x0 - h * e)) / (2 * h) for e in np.eye(18)]
+    by_differences = multipliers_of(np.column_stack(columns))
+    exact = default_gait.stability
+    assert exact.spectral_radius == pytest.approx(by_differences.spectral_radius, rel=1e-5)
+    assert np.allclose(np.abs(exact.values[:4]), np.abs(by_differences.values[:4]), rtol=1e-5)
+    assert not exact.stable and exact.spectral_radius > 100  # open loop: violently unstable
+    assert abs(exact.values[-1]) < 1e-8  # the flow direction: removed by the guard
+
+
+def test_a_perturbation_grows_at_the_predicted_rate(poincare, default_gait):
+    x0 = start(default_gait)
+    values, vectors = np.linalg.eig(default_gait.stability.jacobian)
+    dominant = np.real(vectors[:, np.argmax(np.abs(values))] + vectors[:, np.argsort(-np.abs(values))[1]])
+    x = x0 + 1e-12 * dominant / np.linalg.norm(dominant)
+    deviations = [1e-12]
+    for _ in range(3):
+        x = poincare(x)
+        deviations.append(float(np.linalg.norm(x - x0)))
+    rate = (deviations[-1] / deviations[0]) ** (1 / 3)
+    print(f"\nopen loop: growth per step {rate:.1f}, predicted {default_gait.stability.spectral_radius:.1f}")
+    assert rate == pytest.approx(default_gait.stability.spectral_radius, rel=0.25)
+
+
+def test_the_closed_loop_decays_at_its_predicted_rate(planner, default_gait):
+    orbit = PlannedOrbit.of(default_gait)
+
+    def walker_at(q, qd):
+        walker = Walker(planner.hybrid, orbit, rate=1.0)
+        walker.state = replace(walker.state, q=q, qd=qd)
+        return walker
+
+    x0 = start(default_gait)
+    loop = closed_loop(walker_at, x0)
+    assert loop.stable and 0.9 < loop.spectral_radius < 1.0
+    walker = walker_at(x0[:9], x0[9:] + 1e-6)
+    errors = []
+    for _ in range(12):
+        assert walker.walk_step().touchdown is not None
+        errors.append(float(np.linalg.norm(np.concatenate([walker.state.q, walker.state.qd]) - x0)))
+    rate = (errors[-1] / errors[2]) ** (1 / 9)  # past the fast modes
+    print(f"closed loop: decay per step {rate:.4f}, predicted {loop.spectral_radius:.4f}")
+    assert rate == pytest.approx(loop.spectral_radius, abs=2e-3)
