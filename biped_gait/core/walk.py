@@ -29,8 +29,6 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from pinocchio import forwardKinematics
-
 from . import newton
 from .configurations import GaitMode
 from .flow import hermite_samples
@@ -38,7 +36,6 @@ from .hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
 from .impulses import solve_impulses
 from .model import BipedModel
 from .params import load_params
-from .reports import ground_reaction_inverse_dynamics
 from .settings import DEFAULTS, Settings
 from .world import WorldState, WorldView
 
@@ -177,6 +174,7 @@ class Walker:
         self.flow = hybrid.flow(1)  # one RK8 step per call: the walker owns the grid
         self.step_flow = hybrid.flow(self.grid)
         self.guard = hybrid.guard(0.5 * orbit.period)
+        self.samples = hybrid.samples
         self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
         self.state = WalkState(np.array(orbit.q0), np.array(orbit.qd_a),
                                stance_foot=np.array([0.0, -self.bm.params.hip_half_width, 0.0]))
@@ -192,16 +190,6 @@ class Walker:
         """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current step starts with."""
         self.state = replace(self.state, qd=self.state.qd + np.asarray(delta_qd, float))
 
-    def _lowest_link(self, q: np.ndarray) -> float:
-        """Height (m) of the lowest joint or hand other than the two feet."""
-        model, data = self.bm.single, self.bm.single_data
-        forwardKinematics(model, data, q)
-        heights = [data.oMi[j].translation[2] for j in range(3, model.njoints)]  # knee and above
-        arm = self.bm.params.arm.length
-        for name in ("stance_side_shoulder", "swing_side_shoulder"):
-            heights.append(data.oMi[model.getJointId(name)].act(np.array([0.0, 0.0, -arm]))[2])
-        return float(min(heights))
-
     def walk_step(self) -> StepOutcome:
         """Integrate the current step until touchdown (or a fall) and apply the double support."""
         s = self.state
@@ -212,10 +200,9 @@ class Walker:
         while t_step < limit:
             run = self.flow.propagate(q, qd, h, keep_nodes=True)
             nodes = (run.nodes[0] + t_step, *run.nodes[1:])
-            landed = self.guard.crossed(t_step + h, run.q)
-            t_end = t_step + h
-            if landed:
-                t_end = self.guard.locate(nodes)
+            touchdown = self.guard.touchdown(nodes)
+            landed = touchdown is not None
+            t_end = touchdown if landed else t_step + h
             # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
             # touchdown instant itself opens the next step (post-impact state).
             taus = []
@@ -224,14 +211,9 @@ class Walker:
             ):
                 taus.append(tau)
             if taus:
-                sq, sqd = hermite_samples(nodes, np.array(taus))
-                for tau, q_s, qd_s in zip(taus, sq, sqd):
-                    sample = self._sample(s.t + tau, tau, q_s, qd_s)
-                    samples.append(sample)
-                    self.sample_index += 1
-                    fall = self._fall(sample)
-                    if fall:
-                        return StepOutcome(samples, None, fall)
+                fall = self._sample(nodes, taus, samples)
+                if fall:
+                    return StepOutcome(samples, None, fall)
             if landed:
                 end = self.flow.propagate(q, qd, t_end - t_step)
                 try:
@@ -241,16 +223,26 @@ class Walker:
             t_step, q, qd = t_end, run.q, run.qd
         return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
 
-    def _sample(self, t: float, t_step: float, q: np.ndarray, qd: np.ndarray) -> Sample:
+    def _sample(self, nodes: tuple[np.ndarray, ...], taus: list[float], samples: list[Sample]) -> str:
+        """Append the samples at times ``taus`` (s in the step) of one integration step (its
+        ``nodes``), evaluated in one call, up to the first that falls; the fall's reason or ''."""
         s = self.state
-        qdd = self.flow.acceleration(q, qd)
-        return Sample(t, t_step, q, qd, ground_reaction_inverse_dynamics(self.bm, q, qd, qdd), s.step,
-                      s.stance_side, s.stance_foot)
+        q, qd = hermite_samples(nodes, np.array(taus))
+        evaluated = self.samples.dynamics(q, qd)
+        for k, tau in enumerate(taus):
+            samples.append(Sample(s.t + tau, tau, q[k], qd[k], evaluated.grf[k], s.step, s.stance_side, s.stance_foot))
+            self.sample_index += 1
+            fall = self._fall(samples[-1], float(evaluated.lowest_link[k]))
+            if fall:
+                return fall
+        return ""
 
-    def _fall(self, sample: Sample) -> str:
+    def _fall(self, sample: Sample, lowest_link: float) -> str:
+        """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
+        lowest knee, hip, shoulder or hand."""
         if not sample.grf[2] > 0.0:
             return f"vertical ground reaction not positive ({sample.grf[2]:.3g} N) at t = {sample.t:.4f} s"
-        if sample.t_step > 0.05 * self.period and self._lowest_link(sample.q) < 0.0:
+        if sample.t_step > 0.05 * self.period and lowest_link < 0.0:
             return f"a link went below the ground at t = {sample.t:.4f} s"
         return ""
 
@@ -362,8 +354,11 @@ class Walk:
         while self.steps == 0 or walker.state.step < self.steps:
             s = walker.state
             outcome = walker.walk_step()
-            for sample in outcome.samples:
-                yield replace(sample, world=world.state(sample.q, sample.qd, s.stance_side, s.stance_foot))
+            if outcome.samples:
+                pictures = world.pictures(np.array([x.q for x in outcome.samples]),
+                                          np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
+                for k, sample in enumerate(outcome.samples):
+                    yield replace(sample, world=pictures.state(k))
             if outcome.touchdown is None:
                 t = outcome.samples[-1].t if outcome.samples else s.t
                 yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)
