@@ -86,9 +86,12 @@ def ground_reaction_inverse_dynamics(bm: BipedModel, q: np.ndarray, qd: np.ndarr
     return np.array([tau[0], tau[1], tau[2], data.f[1].angular[2]])
 
 
-def _rows(a: np.ndarray) -> np.ndarray:
-    """``a`` as a C-ordered float array of rows (a single state becomes one row)."""
-    return np.ascontiguousarray(np.atleast_2d(a), dtype=float)
+def _rows(a: np.ndarray, width: int) -> np.ndarray:
+    """``a`` as a C-ordered float array of rows (a single state becomes one row) of ``width``."""
+    rows = np.ascontiguousarray(np.atleast_2d(a), dtype=float)
+    if rows.ndim != 2 or rows.shape[1] != width:
+        raise ValueError(f"expected an n x {width} array, got shape {np.shape(a)}")
+    return rows
 
 
 class SampleEvaluator:
@@ -114,9 +117,16 @@ class SampleEvaluator:
             if native else None
         )
 
+    def _states(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(q, qd) as two n x 9 arrays of the same n; ``ValueError`` if they are not."""
+        q, qd = _rows(q, self.bm.single.nq), _rows(qd, self.bm.single.nv)
+        if len(q) != len(qd):
+            raise ValueError(f"q and qd must be n x {self.bm.single.nq} arrays of the same n, got {len(q)} and {len(qd)} rows")
+        return q, qd
+
     def dynamics(self, q: np.ndarray, qd: np.ndarray) -> SampleDynamics:
         """qdd, ground reaction, swing-tip height, yaw momentum and lowest link of each (q, qd) row."""
-        q, qd = _rows(q), _rows(qd)
+        q, qd = self._states(q, qd)
         if self.native is not None:
             return SampleDynamics(*self.native.dynamics(q, qd))
         bm, model, data = self.bm, self.bm.single, self.bm.single_data
@@ -136,7 +146,7 @@ class SampleEvaluator:
 
     def swing_tip_motion(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Swing-tip height (m) and vertical velocity (m/s) of each (q, qd) row."""
-        q, qd = _rows(q), _rows(qd)
+        q, qd = self._states(q, qd)
         if self.native is not None:
             return self.native.swing_tip_motion(q, qd)
         model, data = self.bm.single, self.bm.single_data
@@ -150,7 +160,7 @@ class SampleEvaluator:
     def poses(self, q: np.ndarray, qd: np.ndarray, mirrored: bool = False) -> SamplePoses:
         """Pelvis placement and velocity, CoM and momenta of each (q, qd) row; the pelvis
         orientation of the mirror image (y -> -y) when ``mirrored``."""
-        q, qd = _rows(q), _rows(qd)
+        q, qd = self._states(q, qd)
         if self.native is not None:
             position, quaternion, velocity, com, p, h = self.native.poses(q, qd, mirrored)
             return SamplePoses(position, quaternion, velocity[:, :3], velocity[:, 3:], com, p, h)
@@ -171,7 +181,7 @@ class SampleEvaluator:
     def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Kinetic plus gravitational potential energy (J) of each (q, qd) row, zero height at the
         stance tip."""
-        q, qd = _rows(q), _rows(qd)
+        q, qd = self._states(q, qd)
         if self.native is not None:
             return self.native.energy(q, qd)
         model, data = self.bm.single, self.bm.single_data
@@ -195,7 +205,7 @@ class JointPlacements:
     def local(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Translations (n x joints x 3, m) and quaternions (n x joints x 4, x, y, z, w) of joints
         1, 2, ... in their parents' frames, for each configuration row of ``q``."""
-        q = _rows(q)
+        q = _rows(q, self.model.nq)
         joints = self.model.njoints - 1
         if self.native is not None:
             translation, quaternion = self.native.local(q)

@@ -191,51 +191,58 @@ class Walker:
         self.state = replace(self.state, qd=self.state.qd + np.asarray(delta_qd, float))
 
     def walk_step(self) -> StepOutcome:
-        """Integrate the current step until touchdown (or a fall) and apply the double support."""
+        """Integrate the current step until touchdown (or 2 T), then evaluate its samples in one
+        call; if none falls, apply the double support."""
         s = self.state
         h = self.period / self.grid
         t_step, q, qd = 0.0, s.q, s.qd
-        samples: list[Sample] = []
         limit = 2.0 * self.period
-        while t_step < limit:
+        runs: list[tuple[np.ndarray, ...]] = []  # the nodes (t, q, qd, qdd) of each integration step
+        taus: list[float] = []
+        touchdown = None
+        while touchdown is None and t_step < limit:
             run = self.flow.propagate(q, qd, h, keep_nodes=True)
             nodes = (run.nodes[0] + t_step, *run.nodes[1:])
+            runs.append(nodes)
             touchdown = self.guard.touchdown(nodes)
-            landed = touchdown is not None
-            t_end = touchdown if landed else t_step + h
+            t_end = t_step + h if touchdown is None else touchdown
             # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
             # touchdown instant itself opens the next step (post-impact state).
-            taus = []
             while (tau := (self.sample_index + len(taus)) / self.rate - s.t) < t_end - 1e-12 or (
-                not landed and tau <= t_end
+                touchdown is None and tau <= t_end
             ):
                 taus.append(tau)
-            if taus:
-                fall = self._sample(nodes, taus, samples)
-                if fall:
-                    return StepOutcome(samples, None, fall)
-            if landed:
-                end = self.flow.propagate(q, qd, t_end - t_step)
-                try:
-                    return StepOutcome(samples, self._double_support(end.q, end.qd, t_end))
-                except Fall as fall:
-                    return StepOutcome(samples, None, str(fall))
             t_step, q, qd = t_end, run.q, run.qd
-        return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
+        samples, fall = self._samples(runs, taus)
+        if fall:
+            return StepOutcome(samples, None, fall)
+        if touchdown is None:
+            return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
+        t_start, q_start, qd_start = runs[-1][0][0], runs[-1][1][0], runs[-1][2][0]
+        end = self.flow.propagate(q_start, qd_start, touchdown - t_start)
+        try:
+            return StepOutcome(samples, self._double_support(end.q, end.qd, touchdown))
+        except Fall as exc:
+            return StepOutcome(samples, None, str(exc))
 
-    def _sample(self, nodes: tuple[np.ndarray, ...], taus: list[float], samples: list[Sample]) -> str:
-        """Append the samples at times ``taus`` (s in the step) of one integration step (its
-        ``nodes``), evaluated in one call, up to the first that falls; the fall's reason or ''."""
+    def _samples(self, runs: list[tuple[np.ndarray, ...]], taus: list[float]) -> tuple[list[Sample], str]:
+        """The samples at times ``taus`` (s in the step) on the interpolant of the integration
+        steps ``runs`` (each sample on the step whose closed interval holds it first), evaluated
+        in one call, up to the first that falls; and the fall's reason ('' for none)."""
         s = self.state
-        q, qd = hermite_samples(nodes, np.array(taus))
+        samples: list[Sample] = []
+        if not taus:
+            return samples, ""
+        nodes = tuple(np.concatenate([run[k][:1] for run in runs] + [runs[-1][k][1:]]) for k in range(4))
+        q, qd = hermite_samples(nodes, np.array(taus), side="left")
         evaluated = self.samples.dynamics(q, qd)
         for k, tau in enumerate(taus):
             samples.append(Sample(s.t + tau, tau, q[k], qd[k], evaluated.grf[k], s.step, s.stance_side, s.stance_foot))
             self.sample_index += 1
             fall = self._fall(samples[-1], float(evaluated.lowest_link[k]))
             if fall:
-                return fall
-        return ""
+                return samples, fall
+        return samples, ""
 
     def _fall(self, sample: Sample, lowest_link: float) -> str:
         """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
