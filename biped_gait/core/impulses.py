@@ -182,7 +182,8 @@ def _l1_program(problem: ImpactProblem) -> _L1Program:
     def with_t(rows: np.ndarray) -> np.ndarray:  # rows over x, extended by zeros over t
         return np.hstack([rows, np.zeros((rows.shape[0], _N_LP - N_UNKNOWN))])
 
-    return _L1Program(np.vstack([_ABS_ROWS, with_t(g)]), np.concatenate([np.zeros(len(_ABS_ROWS)), h]), with_t(a_eq), b_eq)
+    a_ub, b_ub = np.vstack([_ABS_ROWS, with_t(g)]), np.concatenate([np.zeros(len(_ABS_ROWS)), h])
+    return _L1Program(a_ub, b_ub, with_t(a_eq), b_eq)
 
 
 _THREAD = threading.local()

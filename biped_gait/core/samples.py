@@ -86,6 +86,15 @@ def ground_reaction_inverse_dynamics(bm: BipedModel, q: np.ndarray, qd: np.ndarr
     return np.array([tau[0], tau[1], tau[2], data.f[1].angular[2]])
 
 
+def _compiled(native: bool | None) -> bool:
+    """Whether to evaluate in the compiled twin: ``native``, or None for "when it is built"."""
+    if native is None:
+        return NativeSamples is not None
+    if native and NativeSamples is None:
+        raise ValueError("the compiled sample evaluation is not built: run tools/build_native.sh")
+    return native
+
+
 def _rows(a: np.ndarray, width: int) -> np.ndarray:
     """``a`` as a C-ordered float array of rows (a single state becomes one row) of ``width``."""
     rows = np.ascontiguousarray(np.atleast_2d(a), dtype=float)
@@ -107,21 +116,17 @@ class SampleEvaluator:
         self._arms = [model.getJointId(name) for name in _ARMS]
         self._hand = np.array([0.0, 0.0, -bm.params.arm.length])  # in the shoulder joint's frame
         self._tau = np.zeros(model.nv)
-        if native is None:
-            native = NativeSamples is not None
-        if native and NativeSamples is None:
-            raise ValueError("the compiled sample evaluation is not built: run tools/build_native.sh")
         self.native = (
             NativeSamples(model.saveToString(), bm.extended.saveToString(), self._swing_tip, self._pelvis, self._links,
                           self._arms, bm.params.arm.length)
-            if native else None
+            if _compiled(native) else None
         )
 
     def _states(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(q, qd) as two n x 9 arrays of the same n; ``ValueError`` if they are not."""
         q, qd = _rows(q, self.bm.single.nq), _rows(qd, self.bm.single.nv)
         if len(q) != len(qd):
-            raise ValueError(f"q and qd must be n x {self.bm.single.nq} arrays of the same n, got {len(q)} and {len(qd)} rows")
+            raise ValueError(f"q and qd must have as many rows, got {len(q)} and {len(qd)} (n x 9 arrays)")
         return q, qd
 
     def dynamics(self, q: np.ndarray, qd: np.ndarray) -> SampleDynamics:
@@ -196,11 +201,7 @@ class JointPlacements:
     def __init__(self, model: pin.Model, native: bool | None = None) -> None:
         self.model = model
         self.data = model.createData()
-        if native is None:
-            native = NativePlacements is not None
-        if native and NativePlacements is None:
-            raise ValueError("the compiled sample evaluation is not built: run tools/build_native.sh")
-        self.native = NativePlacements(model.saveToString()) if native else None
+        self.native = NativePlacements(model.saveToString()) if _compiled(native) else None
 
     def local(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Translations (n x joints x 3, m) and quaternions (n x joints x 4, x, y, z, w) of joints

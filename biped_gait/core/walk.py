@@ -4,8 +4,9 @@ simulator node; docs/model.md section 8).
 Each step integrates the ballistic dynamics from the actual state (the hybrid step's flow, one
 RK8 step of the walk's grid at a time), detects the swing foot's touchdown with the hybrid
 step's guard (located on the quintic Hermite interpolant and landed on by an exact RK8 step),
-applies the double support with impulses recomputed by the LP from the actual pre-impact state,
-and exchanges the legs (the reset).
+evaluates the step's samples in one call (``samples.SampleEvaluator``; the first that falls ends
+the walk), applies the double support with impulses recomputed by the LP from the actual
+pre-impact state, and exchanges the legs (the reset).
 
 Off the planned orbit the plan's post-impact velocity is not exactly reachable: the angular
 momentum about the foot-to-foot line is conserved through the double support. Aiming at the
@@ -29,6 +30,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+
 from . import newton
 from .configurations import GaitMode
 from .flow import hermite_samples
