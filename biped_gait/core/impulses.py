@@ -108,9 +108,12 @@ class ImpulseSolution:
     ir2_plus = property(lambda self: self.x[IR2_PLUS], doc="I_R2^+: new stance tip's reaction to I^+ (N s)")
 
 
-def _reduced_equations(problem: ImpactProblem) -> tuple[np.ndarray, np.ndarray]:
+Equations = tuple[np.ndarray, np.ndarray]  # A (42 x 47) and b (42) of eqs. (6)-(10)
+
+
+def _reduced_equations(problem: ImpactProblem, equations: Equations) -> Equations:
     """Eqs. (6)-(10) less the one row the null vector y makes dependent (its largest entry)."""
-    a, b = problem.equations()
+    a, b = equations
     drop = int(np.argmax(np.abs(problem.left_null_vector())))
     keep = np.arange(42) != drop
     return a[keep], b[keep]
@@ -138,8 +141,9 @@ def effort(x: np.ndarray) -> float:
     return float(np.abs(x[I_MINUS]).sum() + np.abs(x[I_PLUS]).sum())
 
 
-def _finish(problem: ImpactProblem, effort_name: str, x: np.ndarray, ok: bool, message: str, **kw) -> ImpulseSolution:
-    a, b = problem.equations()
+def _finish(problem: ImpactProblem, equations: Equations, effort_name: str, x: np.ndarray, ok: bool, message: str,
+            **kw) -> ImpulseSolution:
+    a, b = equations
     return ImpulseSolution(
         success=ok,
         message=message,
@@ -156,7 +160,7 @@ _JOINT_IMPULSES = np.r_[np.arange(I_MINUS.start, I_MINUS.stop), np.arange(I_PLUS
 _N_LP = N_UNKNOWN + _JOINT_IMPULSES.size  # the LP's variables: x (47), then t (14) bounding |I^-|, |I^+|
 _LP_COST = np.concatenate([np.zeros(N_UNKNOWN), np.ones(_JOINT_IMPULSES.size)])  # sum(t)
 _LP_LOWER = np.concatenate([_reaction_lower_bounds(), np.zeros(_JOINT_IMPULSES.size)])
-# -t <= I <= t as rows I_j - t_k <= 0, -I_j - t_k <= 0 (two a joint impulse, in the unknowns' order).
+# -t <= I <= t as the rows I_j - t_k <= 0 and -I_j - t_k <= 0, two per joint impulse in the unknowns' order.
 _ABS_ROWS = np.zeros((2 * _JOINT_IMPULSES.size, _N_LP))
 for _k, _j in enumerate(_JOINT_IMPULSES):
     _ABS_ROWS[2 * _k, _j], _ABS_ROWS[2 * _k + 1, _j] = 1.0, -1.0
@@ -166,24 +170,29 @@ for _k, _j in enumerate(_JOINT_IMPULSES):
 @dataclass(frozen=True)
 class _L1Program:
     """The effort LP in (x, t): minimize ``_LP_COST`` (x, t) = sum(t) subject to a_ub (x, t) <= b_ub,
-    a_eq (x, t) = b_eq and (x, t) >= ``_LP_LOWER`` (no upper bounds)."""
+    a_eq (x, t) = b_eq and (x, t) >= ``_LP_LOWER`` (no upper bounds). ``a`` and ``b`` hold the
+    inequality rows, then the equality rows."""
 
-    a_ub: np.ndarray
-    b_ub: np.ndarray
-    a_eq: np.ndarray
-    b_eq: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    inequalities: int
+
+    a_ub = property(lambda self: self.a[: self.inequalities])
+    b_ub = property(lambda self: self.b[: self.inequalities])
+    a_eq = property(lambda self: self.a[self.inequalities :])
+    b_eq = property(lambda self: self.b[self.inequalities :])
 
 
-def _l1_program(problem: ImpactProblem) -> _L1Program:
-    """Eqs. (6)-(10) less one dependent row; -t <= I <= t and the sign rows."""
-    a_eq, b_eq = _reduced_equations(problem)
+def _l1_program(problem: ImpactProblem, equations: Equations) -> _L1Program:
+    """-t <= I <= t, the sign rows, and eqs. (6)-(10) less one dependent row."""
+    a_eq, b_eq = _reduced_equations(problem, equations)
     g, h = _sign_constraints(problem)
-
-    def with_t(rows: np.ndarray) -> np.ndarray:  # rows over x, extended by zeros over t
-        return np.hstack([rows, np.zeros((rows.shape[0], _N_LP - N_UNKNOWN))])
-
-    a_ub, b_ub = np.vstack([_ABS_ROWS, with_t(g)]), np.concatenate([np.zeros(len(_ABS_ROWS)), h])
-    return _L1Program(a_ub, b_ub, with_t(a_eq), b_eq)
+    inequalities = len(_ABS_ROWS) + len(g)
+    a = np.zeros((inequalities + len(a_eq), _N_LP))
+    a[: len(_ABS_ROWS)] = _ABS_ROWS
+    a[len(_ABS_ROWS) : inequalities, :N_UNKNOWN] = g
+    a[inequalities:, :N_UNKNOWN] = a_eq
+    return _L1Program(a, np.concatenate([np.zeros(len(_ABS_ROWS)), h, b_eq]), inequalities)
 
 
 _THREAD = threading.local()
@@ -205,36 +214,36 @@ def _pass_model(highs: highspy.Highs, lp: _L1Program) -> None:
     """Hand ``lp`` to HiGHS as SciPy's ``linprog`` does: rows a_ub (-inf <= . <= b_ub) then a_eq
     (b_eq <= . <= b_eq), the matrix column-wise without its zero entries (row indices increasing
     within a column), all columns continuous."""
-    a = np.vstack([lp.a_ub, lp.a_eq])
-    rows, cols = a.shape
-    column_major = a.ravel(order="F")
+    rows, cols = lp.a.shape
+    column_major = lp.a.ravel(order="F")
     nonzero = np.flatnonzero(column_major)
     start = np.searchsorted(nonzero, rows * np.arange(cols + 1)).astype(np.int32)
     highs.passModel(
         cols, rows, nonzero.size, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize), 0.0,
         _LP_COST, _LP_LOWER, np.full(cols, np.inf),
-        np.concatenate([np.full(lp.b_ub.size, -np.inf), lp.b_eq]), np.concatenate([lp.b_ub, lp.b_eq]),
+        np.concatenate([np.full(lp.inequalities, -np.inf), lp.b_eq]), lp.b,
         start, (nonzero % rows).astype(np.int32), column_major[nonzero], np.zeros(cols, np.int32),
     )
 
 
 def solve_l1(problem: ImpactProblem) -> ImpulseSolution:
     """Minimize W = sum |I| as an LP in (x, t) with -t <= I <= t, by HiGHS; certify by duality."""
-    lp = _l1_program(problem)
+    equations = problem.equations()
+    lp = _l1_program(problem, equations)
     highs = _highs()
     _pass_model(highs, lp)
     highs.run()
     status = highs.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
         message = f"impulse LP: model status is {highs.modelStatusToString(status)}"
-        return _finish(problem, "l1", np.full(N_UNKNOWN, np.nan), False, message)
+        return _finish(problem, equations, "l1", np.full(N_UNKNOWN, np.nan), False, message)
     solution = highs.getSolution()
     at_lower = np.array(highs.getBasis().col_status, dtype=np.int8) == int(highspy.HighsBasisStatus.kLower)
     row_dual = np.array(solution.row_dual)
-    n_ub = lp.b_ub.size
     y_lower = np.where(at_lower, solution.col_dual, 0.0)
-    gap = duality_gap(lp, highs.getInfo().objective_function_value, row_dual[n_ub:], row_dual[:n_ub], y_lower)
-    return _finish(problem, "l1", np.array(solution.col_value[:N_UNKNOWN]), True, "optimal", duality_gap=gap)
+    gap = duality_gap(lp, highs.getInfo().objective_function_value, row_dual[lp.inequalities :],
+                      row_dual[: lp.inequalities], y_lower)
+    return _finish(problem, equations, "l1", np.array(solution.col_value[:N_UNKNOWN]), True, "optimal", duality_gap=gap)
 
 
 def duality_gap(lp: _L1Program, objective: float, y_eq: np.ndarray, y_ub: np.ndarray, y_lower: np.ndarray) -> float:
@@ -251,7 +260,8 @@ def duality_gap(lp: _L1Program, objective: float, y_eq: np.ndarray, y_ub: np.nda
 
 def solve_l2(problem: ImpactProblem) -> ImpulseSolution:
     """Minimize sum I_i^2 (N^2 m^2 s^2) under the same constraints, by OSQP (polished)."""
-    a_eq, b_eq = _reduced_equations(problem)
+    equations = problem.equations()
+    a_eq, b_eq = _reduced_equations(problem, equations)
     g, h = _sign_constraints(problem)
     weights = np.zeros(N_UNKNOWN)
     weights[I_MINUS] = weights[I_PLUS] = 2.0
@@ -286,7 +296,7 @@ def solve_l2(problem: ImpactProblem) -> ImpulseSolution:
     ok = status == "solved" and res.info.status_polish == 1
     x = np.asarray(res.x, float) if ok else np.full(N_UNKNOWN, np.nan)
     reason = status if status != "solved" else "polishing failed"
-    return _finish(problem, "l2", x, ok, "optimal" if ok else f"impulse QP: {reason}")
+    return _finish(problem, equations, "l2", x, ok, "optimal" if ok else f"impulse QP: {reason}")
 
 
 def solve_impulses(problem: ImpactProblem, effort_name: str = "l1") -> ImpulseSolution:
