@@ -16,7 +16,7 @@ setup(
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
     ],
-    install_requires=["numpy", "scipy", "pin", "osqp", "PyYAML"],
+    install_requires=["numpy", "scipy", "pin", "osqp", "highspy", "PyYAML"],
     entry_points={
         "console_scripts": [
             "biped-gait = biped_gait.cli:main",

@@ -1,8 +1,10 @@
 """Benchmark: one full gait solve (BVP with theta closure + impulse LP + reports).
 
 Prints the median cold time (no guess: straight-line start), the median warm time (guess from
-the gait 1 deg of arm amplitude away, as in a sweep), the split between the shooting and the
-rest, and the number of dynamics evaluations (ABA or ABA-derivative calls). Run:
+the gait 1 deg of arm amplitude away, as in a sweep), the number of dynamics evaluations (ABA or
+ABA-derivative calls), and the median times of two parts of a solve: the impulse LP (HiGHS
+through highspy) and the step's figures (91 samples evaluated in one call, in the compiled twin
+and by the Python loops). Run:
 
     .venv/bin/python benchmarks/bench_gait.py [--repeat N]
 """
@@ -16,7 +18,21 @@ import time
 
 import numpy as np
 
+from biped_gait.core.flow import hermite_samples
+from biped_gait.core.impulses import solve_l1
 from biped_gait.core.planner import GaitPlanner, GaitRequest
+from biped_gait.core.reports import energy_drift, step_figures
+from biped_gait.core.samples import NativeSamples, SampleEvaluator
+
+
+def median_ms(call, repeat: int) -> float:
+    """Median wall time (ms) of ``call()`` over ``repeat`` calls."""
+    times = []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return 1e3 * statistics.median(times)
 
 
 def main() -> None:
@@ -53,6 +69,20 @@ def main() -> None:
     print(f"  cold: median {ms(cold):7.2f} ms   dynamics evaluations {statistics.median(cold_evals):.0f}")
     print(f"  warm: median {ms(warm):7.2f} ms   dynamics evaluations {statistics.median(warm_evals):.0f}"
           f"   Newton iterations {statistics.median(iters):.0f}")
+
+    gait = previous
+    lp = planner.hybrid.impact(gait.step.q_target).problem(gait.step.qd_b, gait.step.qd_a)
+    print(f"  impulse LP (HiGHS through highspy): median {median_ms(lambda: solve_l1(lp), 200):.3f} ms")
+    times, (nodes_q, nodes_qd) = np.linspace(0.0, gait.period, planner.settings.samples), gait.step.nodes[1:3]
+    for native in (True, False) if NativeSamples is not None else (False,):
+        samples = SampleEvaluator(planner.model, native=native)
+
+        def figures() -> None:  # what the planner does after the solve (GaitPlanner._figures)
+            q, qd = hermite_samples(gait.step.nodes, times)
+            step_figures(samples, times, q, qd, gait.period, energy_drift(samples, nodes_q, nodes_qd))
+
+        where = "compiled twin" if native else "Python loops"
+        print(f"  step figures ({times.size} samples, {where}): median {median_ms(figures, 100):.3f} ms")
 
 
 if __name__ == "__main__":

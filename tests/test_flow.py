@@ -8,7 +8,6 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import solve_ivp
 
-from biped_gait.core import reports
 from biped_gait.core.flow import BallisticFlow, hermite_samples
 
 pytestmark = pytest.mark.core
@@ -16,7 +15,7 @@ pytestmark = pytest.mark.core
 
 def test_energy_is_conserved_along_the_step(planner, default_gait):
     run = planner.flow.propagate(np.array(default_gait.step.q0), np.array(default_gait.qd_a), default_gait.period, keep_nodes=True)
-    energy = reports.energy(planner.model, run.nodes[1], run.nodes[2])
+    energy = planner.hybrid.samples.energy(run.nodes[1], run.nodes[2])
     assert np.max(np.abs(energy / energy[0] - 1)) < 1e-9
     assert default_gait.figures.energy_drift < 1e-9
 
@@ -26,7 +25,7 @@ def test_energy_is_conserved_from_a_violent_start(planner):
     q0 = np.array([0.02, -0.3, 0.1, 0.4, 0.05, 0.5, -0.4, 0.2, 0.3])
     qd0 = np.array([0.3, 2.5, -1.0, -2.0, 0.5, -1.5, 2.0, -4.0, 6.0])
     run = planner.flow.propagate(q0, qd0, 0.45, keep_nodes=True)
-    energy = reports.energy(planner.model, run.nodes[1], run.nodes[2])
+    energy = planner.hybrid.samples.energy(run.nodes[1], run.nodes[2])
     assert np.max(np.abs(energy / energy[0] - 1)) < 1e-9
 
 

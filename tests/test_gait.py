@@ -17,7 +17,8 @@ from biped_gait.core.bvp import solve_bvp
 from biped_gait.core.settings import DEFAULTS
 from biped_gait.core.planner import GaitPlanner, GaitRequest
 from biped_gait.core.impulses import I_MINUS, I_PLUS, solve_impulses
-from biped_gait.core.reports import ground_reaction_inverse_dynamics, ground_reaction_momentum
+from biped_gait.core.reports import ground_reaction_momentum
+from biped_gait.core.samples import ground_reaction_inverse_dynamics
 
 from .conftest import DEFAULT_REQUEST, impact_problem
 

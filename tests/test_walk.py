@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 
+from biped_gait.core.hybrid import TouchdownGuard
+from biped_gait.core.planner import GaitRequest
 from biped_gait.core.walk import PlannedOrbit, Walker
 
 pytestmark = pytest.mark.core
@@ -75,11 +77,71 @@ def test_a_shove_makes_it_fall_and_the_walker_says_why(planner, default_gait):
 
 
 def test_walker_refuses_a_failed_plan(planner):
-    from biped_gait.core.planner import GaitRequest
-
     failed = planner.plan(GaitRequest(0.45, 5.0, 0.4, "normal"))
     with pytest.raises(ValueError, match="did not converge"):
         Walker(planner.hybrid, PlannedOrbit.of(failed), rate=500.0)
     good = planner.plan(GaitRequest(0.45, 0.45, math.radians(20), "normal"))
     with pytest.raises(ValueError, match="publishing rate must be positive"):
         Walker(planner.hybrid, PlannedOrbit.of(good), rate=0.0)
+
+
+class _HeightIsQ1:
+    """A stand-in for the sample evaluation: the swing-tip height is q1 (m), its rate qd1 (m/s)."""
+
+    def swing_tip_motion(self, q, qd):
+        return np.asarray(q)[:, 0].copy(), np.asarray(qd)[:, 0].copy()
+
+
+def _nodes(t0: float, t1: float, height):
+    """Nodes (t, q, qd, qdd) of one integration step on which the height is the quadratic
+    ``height`` = (a, b, c): a (t - b)^2 + c, which the quintic interpolant reproduces exactly."""
+    a, b, c = height
+    t = np.array([t0, t1])
+    q, qd, qdd = np.zeros((2, 9)), np.zeros((2, 9)), np.zeros((2, 9))
+    q[:, 0], qd[:, 0], qdd[:, 0] = a * (t - b) ** 2 + c, 2 * a * (t - b), 2 * a
+    return t, q, qd, qdd
+
+
+@pytest.mark.parametrize(
+    "height, expected",
+    [
+        ((0.0, 0.0, 0.0), 0.40),  # on the ground from the start of the step: at its start
+        ((1.0, 0.42, -1e-4), 0.41),  # dips under the ground and back up within the step: where it goes under
+        ((1.0, 0.44, 1e-9), 0.44),  # grazes the ground: at the minimum
+        ((1.0, 0.44, 1e-6), None),  # passes a micrometre above it: no touchdown
+        ((1.0, 0.30, 0.0), None),  # rises all along the step
+        ((-1.0, 0.30, 0.0144), 0.42),  # transversal crossing, below the ground at the step's end
+    ],
+)
+def test_guard_finds_crossings_dips_and_grazes(height, expected):
+    guard = TouchdownGuard(_HeightIsQ1(), armed_after=0.225)
+    found = guard.touchdown(_nodes(0.40, 0.45, height))
+    if expected is None:
+        assert found is None
+    else:
+        assert found == pytest.approx(expected, abs=1e-12)
+
+
+def test_guard_is_not_armed_at_the_toe_off():
+    """The swing foot starts on the ground (a scuff at t = 0): no touchdown before the guard is armed."""
+    guard = TouchdownGuard(_HeightIsQ1(), armed_after=0.225)
+    assert guard.touchdown(_nodes(0.0, 0.014, (1.0, 0.0, 0.0))) is None
+    assert guard.touchdown(_nodes(0.0, 0.014, (-1.0, 0.0, 0.0))) is None
+
+
+def test_a_grazing_touchdown_is_walked(planner):
+    """L = T = 0.50 s: the planned touchdown lands on an integration node with the swing tip a
+    rounding error above the ground; the tip dips under it within the next integration step.
+    The guard finds it there (it used to miss it, and the robot fell in the first step)."""
+    gait = planner.plan(GaitRequest(0.50, 0.50, math.radians(23.5), "normal"))
+    assert gait.converged and gait.admissible, gait.reasons
+    walker = Walker(planner.hybrid, PlannedOrbit.of(gait), rate=200.0)
+    outcomes = walk(walker, 20)
+    assert len(outcomes) == 20 and all(o.touchdown is not None for o in outcomes), outcomes[-1].fall
+    errors = [o.touchdown.state_error for o in outcomes]
+    print("\nstate error at each touchdown (rad, rad/s):", " ".join(f"{e:.1e}" for e in errors))
+    assert max(errors) < 1e-9
+    for o in outcomes:
+        assert o.touchdown.t_step == pytest.approx(gait.period, abs=1e-9)
+        assert o.touchdown.W == pytest.approx(gait.W, rel=1e-7)
+    assert np.allclose(walker.state.stance_foot, [20 * 0.50, -0.2, 0.0], atol=1e-9)

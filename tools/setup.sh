@@ -15,11 +15,12 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "^WARNING: Location" || true; }
   echo "$want" > "$stamp"
 fi
-# The compiled twin of the ballistic flow (C++ over the wheels' Pinocchio), rebuilt when its
-# source changes.
+# The compiled twins of the ballistic flow and of the sample evaluation (C++ over the wheels'
+# Pinocchio), rebuilt when their sources change.
 nstamp=.venv/.native.sha
-nwant=$(cat biped_gait/core/native/flow.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
-if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/_flow_native*.so > /dev/null 2>&1; then
+nwant=$(cat biped_gait/core/native/*.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/_flow_native*.so > /dev/null 2>&1 \
+    || ! ls biped_gait/core/_samples_native*.so > /dev/null 2>&1; then
   bash tools/build_native.sh
   echo "$nwant" > "$nstamp"
 fi

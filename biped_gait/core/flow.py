@@ -142,15 +142,16 @@ class BallisticFlow:
 
 
 def hermite_samples(
-    nodes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], times: np.ndarray
+    nodes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], times: np.ndarray, side: str = "right"
 ) -> tuple[np.ndarray, np.ndarray]:
     """q and qd at ``times`` by quintic Hermite interpolation of the nodes' (q, qd, qdd).
 
     The interpolant is of 6th order in the node spacing, far below the tolerances of the
-    a-posteriori checks it serves (ground reaction, swing-tip height).
+    a-posteriori checks it serves (ground reaction, swing-tip height). A time at an inner node
+    is interpolated on the interval that starts there (``side`` "right") or ends there ("left").
     """
     t, q, qd, qdd = nodes
-    idx = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
+    idx = np.clip(np.searchsorted(t, times, side=side) - 1, 0, len(t) - 2)
     h = (t[idx + 1] - t[idx])[:, None]
     s = ((times - t[idx]) / h[:, 0])[:, None]
     q0, q1 = q[idx], q[idx + 1]

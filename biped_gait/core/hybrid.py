@@ -8,8 +8,9 @@ outputs (in the spirit of Drake's compass-gait example):
   rad/s), stance leg 1 on the right with its tip at the origin; no input (no joint torque).
   Output: the state after a duration, optionally its sensitivities.
 - **Guard** (``TouchdownGuard``): the witness function w(q) = height (m) of the swing-foot tip.
-  The step ends where w crosses zero downward, once the guard is armed (half the planned step
-  duration, so that the toe-off scuff at t = 0 does not count).
+  The step ends where w crosses zero downward, or where it touches zero at a minimum (a grazing
+  contact), once the guard is armed (half the planned step duration, so that the toe-off scuff
+  at t = 0 does not count).
 - **Reset** (``ImpactMap`` then ``exchange``): the instantaneous double support at the
   touchdown configuration q_T, eqs. (6)-(10): impulsive joint torques I^-, a passive impact,
   impulsive joint torques I^+. Input: the pre-impact velocity qd_b and the next step's
@@ -31,6 +32,7 @@ from scipy.optimize import brentq
 from .flow import BallisticFlow, hermite_samples
 from .impulses import ImpactProblem
 from .model import BipedModel
+from .samples import SampleEvaluator
 
 # The configuration map at double support, q' = P q (docs/model.md section 5): rows q1'..q9'.
 P_MATRIX = np.zeros((9, 9))
@@ -63,34 +65,62 @@ def other_side(stance_side: str) -> str:
     return "left" if stance_side == "right" else "right"
 
 
-class TouchdownGuard:
-    """The touchdown witness w(q) = swing-tip height (m), armed after ``armed_after`` s of the step."""
+GRAZING_HEIGHT = 1e-8
+"""Largest height (m) of a swing-tip minimum that counts as a touchdown: a tangential (grazing)
+contact, where the tip meets the ground with zero vertical speed, comes out of the integration a
+rounding error above or below the ground. The walker lands within 1e-9 (rad, rad/s) of the plan
+(docs/model.md section 8.5), which puts the tip within about 1e-9 m (a lever arm under 2 m) of
+where the plan puts it: 1e-8 m covers that tenfold, and stays far below any clearance the planner
+reports (millimetres; section 6)."""
 
-    def __init__(self, bm: BipedModel, armed_after: float) -> None:
-        self.bm = bm
+
+class TouchdownGuard:
+    """The touchdown witness w(q) = swing-tip height (m) and its guard, armed for the integration
+    steps that end later than ``armed_after`` s into the step (so that the toe-off scuff at t = 0,
+    where w = 0, does not count). Over one integration step the guard fires
+
+    - where w crosses zero downward: w <= 0 at the end of the step, or at an interior minimum of w
+      (the tip dips under the ground and comes back up within the step: a touchdown that the end
+      of the step misses, e.g. when the previous step ended on the ground to rounding);
+    - at an interior minimum of w no higher than ``GRAZING_HEIGHT`` (a grazing contact).
+
+    Both are found on the quintic Hermite interpolant of the step's nodes (t, q, qd, qdd): w's
+    rate, the tip's vertical velocity, is exactly the derivative of w along it.
+    """
+
+    def __init__(self, samples: SampleEvaluator, armed_after: float) -> None:
+        self.samples = samples
         self.armed_after = armed_after
 
-    def height(self, q: np.ndarray) -> float:
-        """w(q): height (m) of the swing-foot tip."""
-        return float(self.bm.swing_tip(q)[2])
+    def motion(self, nodes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], t: float) -> tuple[float, float]:
+        """w (m) and its rate (m/s) at time ``t`` (s in the step) on the interpolant of ``nodes``."""
+        q, qd = hermite_samples(nodes, np.array([t]))
+        height, rate = self.samples.swing_tip_motion(q, qd)
+        return float(height[0]), float(rate[0])
 
-    def crossed(self, t_end: float, q_end: np.ndarray) -> bool:
-        """Whether the guard fired by the end ``t_end`` (s in the step) of an integration step
-        that ends at configuration ``q_end``."""
-        return t_end > self.armed_after and self.height(q_end) <= 0.0
+    def touchdown(self, nodes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> float | None:
+        """Time (s in the step, to 1e-14 s) of the touchdown within the integration step of
+        ``nodes`` (t, q, qd, qdd at its start and end), or None if the guard does not fire in it."""
+        t, q, qd = nodes[0], nodes[1], nodes[2]
+        if not t[-1] > self.armed_after:
+            return None
+        (h_start, h_end), (rate_start, rate_end) = self.samples.swing_tip_motion(q[[0, -1]], qd[[0, -1]])
+        if h_end <= 0.0:
+            return self._crossing(nodes, h_start, t[-1])
+        if not rate_start < 0.0 <= rate_end:  # no minimum of w inside the step
+            return None
+        t_min = brentq(lambda s: self.motion(nodes, s)[1], t[0], t[-1], xtol=1e-14, rtol=1e-14)
+        h_min = self.motion(nodes, t_min)[0]
+        if h_min <= 0.0:
+            return self._crossing(nodes, h_start, t_min)
+        return t_min if h_min <= GRAZING_HEIGHT else None
 
-    def locate(self, nodes: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> float:
-        """Time (s in the step) where w crosses zero within one integration step, found on the
-        quintic Hermite interpolant of its ``nodes`` (t, q, qd, qdd) to 1e-14 s."""
-        t0, t1 = nodes[0][0], nodes[0][-1]
-
-        def height(t: float) -> float:
-            q, _ = hermite_samples(nodes, np.array([t]))
-            return self.height(q[0])
-
-        if height(t0) <= 0.0:  # already touching at the start of this integration step
-            return t0
-        return brentq(height, t0, t1, xtol=1e-14, rtol=1e-14)
+    def _crossing(self, nodes: tuple[np.ndarray, ...], h_start: float, t_below: float) -> float:
+        """Where w crosses zero downward between the step's start (height ``h_start``) and
+        ``t_below`` (s), where w <= 0."""
+        if h_start <= 0.0:  # already touching at the start of this integration step
+            return float(nodes[0][0])
+        return brentq(lambda s: self.motion(nodes, s)[0], nodes[0][0], t_below, xtol=1e-14, rtol=1e-14)
 
 
 def locked_rotation(bm: BipedModel, q_t: np.ndarray) -> np.ndarray:
@@ -172,10 +202,12 @@ def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, jo
 
 
 class HybridStep:
-    """The hybrid step of one biped: its flows (one per RK8 grid), guard, reset maps."""
+    """The hybrid step of one biped: its flows (one per RK8 grid), guard, reset maps, and the
+    evaluation of its samples (``samples``)."""
 
     def __init__(self, bm: BipedModel) -> None:
         self.bm = bm
+        self.samples = SampleEvaluator(bm)
         self._flows: dict[int, BallisticFlow] = {}
 
     def flow(self, steps: int) -> BallisticFlow:
@@ -186,7 +218,7 @@ class HybridStep:
 
     def guard(self, armed_after: float) -> TouchdownGuard:
         """The touchdown guard, armed ``armed_after`` s into the step."""
-        return TouchdownGuard(self.bm, armed_after)
+        return TouchdownGuard(self.samples, armed_after)
 
     def impact(self, q_t: np.ndarray) -> ImpactMap:
         """The reset's double support at touchdown configuration ``q_t``."""

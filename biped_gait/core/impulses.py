@@ -13,19 +13,20 @@ Their rank is 41: y = [z_d; 0; z_d; 0; z_d] is a left null vector (z_d the locke
 about the foot-to-foot line), so the system is consistent only if y^T b = z_d^T D_e (Xd^b -
 Xd^a) = 0. One dependent row is dropped and the closure residual is checked and reported.
 
-Effort ``l1``: W = sum |I^-| + |I^+| (N m s) as a linear program solved by HiGHS (global
-optimum; its dual certificate is checked). Effort ``l2``: sum of squared impulses by OSQP.
+Effort ``l1``: W = sum |I^-| + |I^+| (N m s) as a linear program solved by HiGHS through
+``highspy`` (global optimum; its dual certificate is checked). Effort ``l2``: sum of squared impulses by OSQP.
 Impulses in N m s (joints) and N s (reactions); velocities in m/s and rad/s.
 """
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, replace
 
+import highspy
 import numpy as np
 import osqp
 from scipy import sparse
-from scipy.optimize import linprog
 
 N_UNKNOWN = 47
 EFFORTS = ("l1", "l2")
@@ -107,9 +108,12 @@ class ImpulseSolution:
     ir2_plus = property(lambda self: self.x[IR2_PLUS], doc="I_R2^+: new stance tip's reaction to I^+ (N s)")
 
 
-def _reduced_equations(problem: ImpactProblem) -> tuple[np.ndarray, np.ndarray]:
+Equations = tuple[np.ndarray, np.ndarray]  # A (42 x 47) and b (42) of eqs. (6)-(10)
+
+
+def _reduced_equations(problem: ImpactProblem, equations: Equations) -> Equations:
     """Eqs. (6)-(10) less the one row the null vector y makes dependent (its largest entry)."""
-    a, b = problem.equations()
+    a, b = equations
     drop = int(np.argmax(np.abs(problem.left_null_vector())))
     keep = np.arange(42) != drop
     return a[keep], b[keep]
@@ -123,12 +127,13 @@ def _sign_constraints(problem: ImpactProblem) -> tuple[np.ndarray, np.ndarray]:
     return g, np.zeros(2)
 
 
-def _reaction_bounds() -> list[tuple[float | None, float | None]]:
-    """Vertical components of the three reaction impulses non-negative; the rest free."""
-    bounds: list[tuple[float | None, float | None]] = [(None, None)] * N_UNKNOWN
+def _reaction_lower_bounds() -> np.ndarray:
+    """Lower bounds of the unknowns: the vertical components of the three reaction impulses
+    non-negative (N s), the rest free (-inf)."""
+    lower = np.full(N_UNKNOWN, -np.inf)
     for sl in (IR1_MINUS, IR2, IR2_PLUS):
-        bounds[sl.stop - 1] = (0.0, None)
-    return bounds
+        lower[sl.stop - 1] = 0.0
+    return lower
 
 
 def effort(x: np.ndarray) -> float:
@@ -136,8 +141,9 @@ def effort(x: np.ndarray) -> float:
     return float(np.abs(x[I_MINUS]).sum() + np.abs(x[I_PLUS]).sum())
 
 
-def _finish(problem: ImpactProblem, effort_name: str, x: np.ndarray, ok: bool, message: str, **kw) -> ImpulseSolution:
-    a, b = problem.equations()
+def _finish(problem: ImpactProblem, equations: Equations, effort_name: str, x: np.ndarray, ok: bool, message: str,
+            **kw) -> ImpulseSolution:
+    a, b = equations
     return ImpulseSolution(
         success=ok,
         message=message,
@@ -150,56 +156,120 @@ def _finish(problem: ImpactProblem, effort_name: str, x: np.ndarray, ok: bool, m
     )
 
 
+_JOINT_IMPULSES = np.r_[np.arange(I_MINUS.start, I_MINUS.stop), np.arange(I_PLUS.start, I_PLUS.stop)]
+_N_LP = N_UNKNOWN + _JOINT_IMPULSES.size  # the LP's variables: x (47), then t (14) bounding |I^-|, |I^+|
+_LP_COST = np.concatenate([np.zeros(N_UNKNOWN), np.ones(_JOINT_IMPULSES.size)])  # sum(t)
+_LP_LOWER = np.concatenate([_reaction_lower_bounds(), np.zeros(_JOINT_IMPULSES.size)])
+# -t <= I <= t as the rows I_j - t_k <= 0 and -I_j - t_k <= 0, two per joint impulse in the unknowns' order.
+_ABS_ROWS = np.zeros((2 * _JOINT_IMPULSES.size, _N_LP))
+for _k, _j in enumerate(_JOINT_IMPULSES):
+    _ABS_ROWS[2 * _k, _j], _ABS_ROWS[2 * _k + 1, _j] = 1.0, -1.0
+    _ABS_ROWS[2 * _k : 2 * _k + 2, N_UNKNOWN + _k] = -1.0
+
+
+@dataclass(frozen=True)
+class _L1Program:
+    """The effort LP in (x, t): minimize ``_LP_COST`` (x, t) = sum(t) subject to a_ub (x, t) <= b_ub,
+    a_eq (x, t) = b_eq and (x, t) >= ``_LP_LOWER`` (no upper bounds). ``a`` and ``b`` hold the
+    inequality rows, then the equality rows."""
+
+    a: np.ndarray
+    b: np.ndarray
+    inequalities: int
+
+    a_ub = property(lambda self: self.a[: self.inequalities])
+    b_ub = property(lambda self: self.b[: self.inequalities])
+    a_eq = property(lambda self: self.a[self.inequalities :])
+    b_eq = property(lambda self: self.b[self.inequalities :])
+
+
+def _l1_program(problem: ImpactProblem, equations: Equations) -> _L1Program:
+    """-t <= I <= t, the sign rows, and eqs. (6)-(10) less one dependent row."""
+    a_eq, b_eq = _reduced_equations(problem, equations)
+    g, h = _sign_constraints(problem)
+    inequalities = len(_ABS_ROWS) + len(g)
+    a = np.zeros((inequalities + len(a_eq), _N_LP))
+    a[: len(_ABS_ROWS)] = _ABS_ROWS
+    a[len(_ABS_ROWS) : inequalities, :N_UNKNOWN] = g
+    a[inequalities:, :N_UNKNOWN] = a_eq
+    return _L1Program(a, np.concatenate([np.zeros(len(_ABS_ROWS)), h, b_eq]), inequalities)
+
+
+_THREAD = threading.local()
+
+
+def _highs() -> highspy.Highs:
+    """This thread's HiGHS instance (a model is passed afresh for each solve): silent, dual
+    simplex, presolve on - the settings of SciPy's ``linprog(method="highs")``, whose HiGHS
+    version (1.12.0) is the one pinned, so the two give the same optimum to the last bit."""
+    if not hasattr(_THREAD, "highs"):
+        highs = highspy.Highs()
+        highs.setOptionValue("output_flag", False)
+        highs.setOptionValue("simplex_strategy", int(highspy.simplex_constants.SimplexStrategy.kSimplexStrategyDual))
+        _THREAD.highs = highs
+    return _THREAD.highs
+
+
+def _pass_model(highs: highspy.Highs, lp: _L1Program) -> None:
+    """Hand ``lp`` to HiGHS as SciPy's ``linprog`` does: rows a_ub (-inf <= . <= b_ub) then a_eq
+    (b_eq <= . <= b_eq), the matrix column-wise without its zero entries (row indices increasing
+    within a column), all columns continuous."""
+    rows, cols = lp.a.shape
+    column_major = lp.a.ravel(order="F")
+    nonzero = np.flatnonzero(column_major)
+    start = np.searchsorted(nonzero, rows * np.arange(cols + 1)).astype(np.int32)
+    highs.passModel(
+        cols, rows, nonzero.size, int(highspy.MatrixFormat.kColwise), int(highspy.ObjSense.kMinimize), 0.0,
+        _LP_COST, _LP_LOWER, np.full(cols, np.inf),
+        np.concatenate([np.full(lp.inequalities, -np.inf), lp.b_eq]), lp.b,
+        start, (nonzero % rows).astype(np.int32), column_major[nonzero], np.zeros(cols, np.int32),
+    )
+
+
 def solve_l1(problem: ImpactProblem) -> ImpulseSolution:
     """Minimize W = sum |I| as an LP in (x, t) with -t <= I <= t, by HiGHS; certify by duality."""
-    a_eq, b_eq = _reduced_equations(problem)
-    g, h = _sign_constraints(problem)
-    joint_idx = np.r_[np.arange(12, 19), np.arange(37, 44)]
-    n_t = joint_idx.size
-    n = N_UNKNOWN + n_t
-    c = np.concatenate([np.zeros(N_UNKNOWN), np.ones(n_t)])
-    a_ub = np.zeros((2 * n_t + g.shape[0], n))
-    for k, j in enumerate(joint_idx):
-        a_ub[2 * k, j], a_ub[2 * k, N_UNKNOWN + k] = 1.0, -1.0
-        a_ub[2 * k + 1, j], a_ub[2 * k + 1, N_UNKNOWN + k] = -1.0, -1.0
-    a_ub[2 * n_t :, :N_UNKNOWN] = g
-    b_ub = np.concatenate([np.zeros(2 * n_t), h])
-    a_eq_full = np.hstack([a_eq, np.zeros((a_eq.shape[0], n_t))])
-    bounds = _reaction_bounds() + [(0.0, None)] * n_t
-    res = linprog(c, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq_full, b_eq=b_eq, bounds=bounds, method="highs")
-    if res.status != 0 or res.x is None:
-        return _finish(problem, "l1", np.full(N_UNKNOWN, np.nan), False, f"impulse LP: {res.message}")
-    gap = duality_gap(c, a_ub, b_ub, a_eq_full, b_eq, bounds, res)
-    return _finish(problem, "l1", res.x[:N_UNKNOWN], True, "optimal", duality_gap=gap)
+    equations = problem.equations()
+    lp = _l1_program(problem, equations)
+    highs = _highs()
+    _pass_model(highs, lp)
+    highs.run()
+    status = highs.getModelStatus()
+    if status != highspy.HighsModelStatus.kOptimal:
+        message = f"impulse LP: model status is {highs.modelStatusToString(status)}"
+        return _finish(problem, equations, "l1", np.full(N_UNKNOWN, np.nan), False, message)
+    solution = highs.getSolution()
+    at_lower = np.array(highs.getBasis().col_status, dtype=np.int8) == int(highspy.HighsBasisStatus.kLower)
+    row_dual = np.array(solution.row_dual)
+    y_lower = np.where(at_lower, solution.col_dual, 0.0)
+    gap = duality_gap(lp, highs.getInfo().objective_function_value, row_dual[lp.inequalities :],
+                      row_dual[: lp.inequalities], y_lower)
+    return _finish(problem, equations, "l1", np.array(solution.col_value[:N_UNKNOWN]), True, "optimal", duality_gap=gap)
 
 
-def duality_gap(c, a_ub, b_ub, a_eq, b_eq, bounds, res) -> float:
-    """Certificate of a HiGHS LP optimum: the larger of the primal-dual objective gap and the
-    dual infeasibility (both relative to the objective's scale), from HiGHS's marginals."""
-    y_eq = res.eqlin.marginals
-    y_ub = res.ineqlin.marginals
-    y_lo = res.lower.marginals
-    y_up = res.upper.marginals
-    lower = np.array([lo if lo is not None else 0.0 for lo, _ in bounds])
-    upper = np.array([up if up is not None else 0.0 for _, up in bounds])
-    dual_obj = b_eq @ y_eq + b_ub @ y_ub + lower @ y_lo + upper @ y_up
-    stationarity = c - a_eq.T @ y_eq - a_ub.T @ y_ub - y_lo - y_up
-    sign_violation = max(0.0, float(np.max(y_ub, initial=0.0)), float(-np.min(y_lo, initial=0.0)))
-    scale = max(1.0, abs(res.fun))
-    return max(abs(res.fun - dual_obj), float(np.max(np.abs(stationarity))), sign_violation) / scale
+def duality_gap(lp: _L1Program, objective: float, y_eq: np.ndarray, y_ub: np.ndarray, y_lower: np.ndarray) -> float:
+    """Certificate of an LP optimum: the larger of the primal-dual objective gap and the dual
+    infeasibility (both relative to the objective's scale), from the duals (marginals, SciPy's
+    sign convention) of the equality rows, the inequality rows and the lower bounds."""
+    lower = np.where(np.isfinite(_LP_LOWER), _LP_LOWER, 0.0)
+    dual_obj = lp.b_eq @ y_eq + lp.b_ub @ y_ub + lower @ y_lower
+    stationarity = _LP_COST - lp.a_eq.T @ y_eq - lp.a_ub.T @ y_ub - y_lower
+    sign_violation = max(0.0, float(np.max(y_ub, initial=0.0)), float(-np.min(y_lower, initial=0.0)))
+    scale = max(1.0, abs(objective))
+    return max(abs(objective - dual_obj), float(np.max(np.abs(stationarity))), sign_violation) / scale
 
 
 def solve_l2(problem: ImpactProblem) -> ImpulseSolution:
     """Minimize sum I_i^2 (N^2 m^2 s^2) under the same constraints, by OSQP (polished)."""
-    a_eq, b_eq = _reduced_equations(problem)
+    equations = problem.equations()
+    a_eq, b_eq = _reduced_equations(problem, equations)
     g, h = _sign_constraints(problem)
     weights = np.zeros(N_UNKNOWN)
     weights[I_MINUS] = weights[I_PLUS] = 2.0
     rows = [a_eq, g]
     lower = [b_eq, np.full(g.shape[0], -np.inf)]
     upper = [b_eq, h]
-    for idx, (lo, _) in enumerate(_reaction_bounds()):
-        if lo is not None:
+    for idx, lo in enumerate(_reaction_lower_bounds()):
+        if np.isfinite(lo):
             row = np.zeros((1, N_UNKNOWN))
             row[0, idx] = 1.0
             rows.append(row)
@@ -226,7 +296,7 @@ def solve_l2(problem: ImpactProblem) -> ImpulseSolution:
     ok = status == "solved" and res.info.status_polish == 1
     x = np.asarray(res.x, float) if ok else np.full(N_UNKNOWN, np.nan)
     reason = status if status != "solved" else "polishing failed"
-    return _finish(problem, "l2", x, ok, "optimal" if ok else f"impulse QP: {reason}")
+    return _finish(problem, equations, "l2", x, ok, "optimal" if ok else f"impulse QP: {reason}")
 
 
 def solve_impulses(problem: ImpactProblem, effort_name: str = "l1") -> ImpulseSolution:

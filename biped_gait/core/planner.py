@@ -31,7 +31,7 @@ from .hybrid import HybridStep
 from .impulses import EFFORTS, solve_impulses
 from .model import BipedModel
 from .params import BipedParams, load_params
-from .reports import StepFigures, StepTrajectory, energy_drift, step_figures
+from .reports import StepFigures, energy_drift, step_figures
 from .settings import DEFAULTS, Settings
 from .stability import open_loop
 
@@ -232,9 +232,8 @@ class GaitPlanner:
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:
         times = np.linspace(0.0, period, self.settings.samples)
         q, qd = hermite_samples(step.nodes, times)
-        qdd = np.array([self.flow.acceleration(a, b) for a, b in zip(q, qd)])
-        traj = StepTrajectory(times, q, qd, qdd)
-        return step_figures(self.model, traj, period, energy_drift(self.model, step.nodes[1], step.nodes[2]))
+        samples = self.hybrid.samples
+        return step_figures(samples, times, q, qd, period, energy_drift(samples, step.nodes[1], step.nodes[2]))
 
 
 def _near(gait: Gait, guess: tuple[np.ndarray, float]) -> bool:

@@ -1,8 +1,9 @@
 """A-posteriori figures of a ballistic step (docs/model.md section 6).
 
 Ground reaction at the stance tip (paper eq. 1: three forces, N, and the moment about the
-vertical, N m), computed two ways; swing-tip height (m); friction ratio; angular momentum
-about vertical axes (kg m^2/s). Everything in the world frame, stance tip at the origin.
+vertical, N m), by inverse dynamics (``samples``, reported) and by Newton-Euler on the whole body
+(here, the check); swing-tip height (m); friction ratio; angular momentum about vertical axes
+(kg m^2/s); energy drift. Everything in the world frame, stance tip at the origin.
 """
 
 from __future__ import annotations
@@ -12,7 +13,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
-from .model import SWING_TIP, BipedModel, cross
+from .model import BipedModel, cross
+from .samples import SampleEvaluator
 
 
 @dataclass(frozen=True)
@@ -23,20 +25,6 @@ class StepTrajectory:
     q: np.ndarray
     qd: np.ndarray
     qdd: np.ndarray
-
-
-def ground_reaction_inverse_dynamics(bm: BipedModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-    """[Fx, Fy, Fz, Mz] at the stance tip by RNEA of the extended model with the root at rest.
-
-    The generalized force of the root translation joint is the ground force; the spatial force
-    that joint transmits, taken at the tip with world axes, gives the vertical moment.
-    """
-    model, data = bm.extended, bm.extended_data
-    x = bm.extended_state(q)
-    xd = np.concatenate([np.zeros(3), qd])
-    xdd = np.concatenate([np.zeros(3), qdd])
-    tau = pin.rnea(model, data, x, xd, xdd)
-    return np.array([tau[0], tau[1], tau[2], data.f[1].angular[2]])
 
 
 def ground_reaction_momentum(bm: BipedModel, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
@@ -56,38 +44,10 @@ def ground_reaction_momentum(bm: BipedModel, q: np.ndarray, qd: np.ndarray, qdd:
     return np.array([force[0], force[1], force[2], dh_origin[2]])
 
 
-def swing_tip_heights(bm: BipedModel, q: np.ndarray) -> np.ndarray:
-    """Height z (m) of the swing tip at each configuration (rows of ``q``)."""
-    model, data = bm.single, bm.single_data
-    frame = model.getFrameId(SWING_TIP)
-    out = np.empty(len(q))
-    for i, qi in enumerate(q):
-        pin.forwardKinematics(model, data, qi)
-        out[i] = pin.updateFramePlacement(model, data, frame).translation[2]
-    return out
-
-
-def vertical_momentum_over_step(bm: BipedModel, traj: StepTrajectory) -> np.ndarray:
-    """Angular momentum (kg m^2/s) about the vertical through the stance tip, at each sample."""
-    origin = np.zeros(3)
-    return np.array(
-        [bm.vertical_momentum_about(q, np.concatenate([np.zeros(3), qd]), origin) for q, qd in zip(traj.q, traj.qd)]
-    )
-
-
-def energy(bm: BipedModel, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """Total mechanical energy (J) at each row of (q, qd): kinetic plus gravitational potential,
-    zero height at the stance tip."""
-    model, data = bm.single, bm.single_data
-    return np.array(
-        [pin.computeKineticEnergy(model, data, a, b) + pin.computePotentialEnergy(model, data, a) for a, b in zip(q, qd)]
-    )
-
-
-def energy_drift(bm: BipedModel, q: np.ndarray, qd: np.ndarray) -> float:
-    """max |E / E(first row) - 1| over the rows of (q, qd): how far a ballistic integration is
-    from conserving energy (dimensionless)."""
-    e = energy(bm, q, qd)
+def energy_drift(samples: SampleEvaluator, q: np.ndarray, qd: np.ndarray) -> float:
+    """max |E / E(first row) - 1| over the rows of (q, qd), E the total mechanical energy: how far
+    a ballistic integration is from conserving energy (dimensionless)."""
+    e = samples.energy(q, qd)
     return float(np.max(np.abs(e / e[0] - 1)))
 
 
@@ -112,23 +72,27 @@ class StepFigures:
         return replace(self, samples=None, grf=None, h_vertical=None)
 
 
-def step_figures(bm: BipedModel, traj: StepTrajectory, period: float, drift: float) -> StepFigures:
-    """Ground reaction, swing clearance on (0.05 T, 0.95 T), friction ratio, joint ranges, and
-    the integration's energy ``drift``."""
-    grf = np.array([ground_reaction_inverse_dynamics(bm, *row) for row in zip(traj.q, traj.qd, traj.qdd)])
-    interior = (traj.t > 0.05 * period) & (traj.t < 0.95 * period)
-    heights = swing_tip_heights(bm, traj.q[interior])
+def step_figures(
+    samples: SampleEvaluator, t: np.ndarray, q: np.ndarray, qd: np.ndarray, period: float, drift: float
+) -> StepFigures:
+    """The figures of a step sampled at times ``t`` (s) in states (q, qd) (rows), evaluated in one
+    call: ground reaction, swing clearance on (0.05 T, 0.95 T), friction ratio, joint ranges, yaw
+    momentum, and the integration's energy ``drift``."""
+    evaluated = samples.dynamics(q, qd)
+    grf = evaluated.grf
+    interior = (t > 0.05 * period) & (t < 0.95 * period)
+    heights = evaluated.swing_height[interior]
     fz = grf[:, 2]
     ratio = np.where(fz > 0, np.hypot(grf[:, 0], grf[:, 1]) / np.where(fz > 0, fz, 1.0), np.inf)
     return StepFigures(
-        samples=traj,
+        samples=StepTrajectory(t, q, qd, evaluated.qdd),
         grf=grf,
-        h_vertical=vertical_momentum_over_step(bm, traj),
+        h_vertical=evaluated.yaw_momentum,
         min_grf_z=float(fz.min()),
         min_swing_height=float(heights.min()),
         max_friction_ratio=float(ratio.max()),
-        q3_range=(float(traj.q[:, 2].min()), float(traj.q[:, 2].max())),
-        q5_range=(float(traj.q[:, 4].min()), float(traj.q[:, 4].max())),
-        q9_min=float(traj.q[:, 8].min()),
+        q3_range=(float(q[:, 2].min()), float(q[:, 2].max())),
+        q5_range=(float(q[:, 4].min()), float(q[:, 4].max())),
+        q9_min=float(q[:, 8].min()),
         energy_drift=drift,
     )

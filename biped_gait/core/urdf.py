@@ -25,30 +25,29 @@ PHYSICAL_JOINTS = (
 )
 
 
-def physical_joint_positions(q: np.ndarray, stance_side: str = "right") -> dict[str, float]:
-    """URDF joint angles (rad) from the model's q (stance leg 1) for the given stance side.
+# Where each of PHYSICAL_JOINTS comes from in the model's q (stance leg 1): (index, sign), for a
+# right and for a left stance foot. With the left foot in stance the model is the robot's mirror
+# image (docs/model.md section 5): legs and arms swap and yaw changes sign.
+_FROM_MODEL = {
+    "right": ((3, -1.0), (2, -1.0), (7, 1.0), (8, 1.0), (4, 1.0), (5, 1.0), (6, 1.0)),
+    "left": ((7, 1.0), (8, 1.0), (3, -1.0), (2, -1.0), (4, -1.0), (6, 1.0), (5, 1.0)),
+}
 
-    With the right foot in stance the model is the robot itself; with the left foot in stance
-    the model is its mirror image (docs/model.md section 5), so legs and arms swap and yaw changes sign.
-    Works for joint velocities too (the map is linear).
-    """
-    stance = {"hip": -q[3], "knee": -q[2], "shoulder": q[5]}
-    swing = {"hip": q[7], "knee": q[8], "shoulder": q[6]}
-    if stance_side == "right":
-        right, left, yaw = stance, swing, q[4]
-    elif stance_side == "left":
-        right, left, yaw = swing, stance, -q[4]
-    else:
+
+def physical_joint_array(q: np.ndarray, stance_side: str = "right") -> np.ndarray:
+    """URDF joint angles (rad), PHYSICAL_JOINTS order along the last axis, from the model's q
+    (stance leg 1; one row or many) for the given stance side. Works for joint velocities too
+    (the map is linear)."""
+    if stance_side not in _FROM_MODEL:
         raise ValueError(f"stance side must be 'right' or 'left', got {stance_side!r}")
-    return {
-        "right_hip": float(right["hip"]),
-        "right_knee": float(right["knee"]),
-        "left_hip": float(left["hip"]),
-        "left_knee": float(left["knee"]),
-        "torso_yaw": float(yaw),
-        "right_shoulder": float(right["shoulder"]),
-        "left_shoulder": float(left["shoulder"]),
-    }
+    index, sign = zip(*_FROM_MODEL[stance_side])
+    return np.asarray(q)[..., list(index)] * np.array(sign)
+
+
+def physical_joint_positions(q: np.ndarray, stance_side: str = "right") -> dict[str, float]:
+    """URDF joint angles (rad) by joint name from the model's q (stance leg 1) for the given
+    stance side (``physical_joint_array``)."""
+    return dict(zip(PHYSICAL_JOINTS, physical_joint_array(q, stance_side).tolist()))
 
 
 def _vec(v) -> str:

@@ -4,8 +4,9 @@ simulator node; docs/model.md section 8).
 Each step integrates the ballistic dynamics from the actual state (the hybrid step's flow, one
 RK8 step of the walk's grid at a time), detects the swing foot's touchdown with the hybrid
 step's guard (located on the quintic Hermite interpolant and landed on by an exact RK8 step),
-applies the double support with impulses recomputed by the LP from the actual pre-impact state,
-and exchanges the legs (the reset).
+evaluates the step's samples in one call (``samples.SampleEvaluator``; the first that falls ends
+the walk), applies the double support with impulses recomputed by the LP from the actual
+pre-impact state, and exchanges the legs (the reset).
 
 Off the planned orbit the plan's post-impact velocity is not exactly reachable: the angular
 momentum about the foot-to-foot line is conserved through the double support. Aiming at the
@@ -29,7 +30,6 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from pinocchio import forwardKinematics
 
 from . import newton
 from .configurations import GaitMode
@@ -38,7 +38,6 @@ from .hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
 from .impulses import solve_impulses
 from .model import BipedModel
 from .params import load_params
-from .reports import ground_reaction_inverse_dynamics
 from .settings import DEFAULTS, Settings
 from .world import WorldState, WorldView
 
@@ -177,6 +176,7 @@ class Walker:
         self.flow = hybrid.flow(1)  # one RK8 step per call: the walker owns the grid
         self.step_flow = hybrid.flow(self.grid)
         self.guard = hybrid.guard(0.5 * orbit.period)
+        self.samples = hybrid.samples
         self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
         self.state = WalkState(np.array(orbit.q0), np.array(orbit.qd_a),
                                stance_foot=np.array([0.0, -self.bm.params.hip_half_width, 0.0]))
@@ -192,65 +192,66 @@ class Walker:
         """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current step starts with."""
         self.state = replace(self.state, qd=self.state.qd + np.asarray(delta_qd, float))
 
-    def _lowest_link(self, q: np.ndarray) -> float:
-        """Height (m) of the lowest joint or hand other than the two feet."""
-        model, data = self.bm.single, self.bm.single_data
-        forwardKinematics(model, data, q)
-        heights = [data.oMi[j].translation[2] for j in range(3, model.njoints)]  # knee and above
-        arm = self.bm.params.arm.length
-        for name in ("stance_side_shoulder", "swing_side_shoulder"):
-            heights.append(data.oMi[model.getJointId(name)].act(np.array([0.0, 0.0, -arm]))[2])
-        return float(min(heights))
-
     def walk_step(self) -> StepOutcome:
-        """Integrate the current step until touchdown (or a fall) and apply the double support."""
+        """Integrate the current step until touchdown (or 2 T), then evaluate its samples in one
+        call; if none falls, apply the double support."""
         s = self.state
         h = self.period / self.grid
         t_step, q, qd = 0.0, s.q, s.qd
-        samples: list[Sample] = []
         limit = 2.0 * self.period
-        while t_step < limit:
+        runs: list[tuple[np.ndarray, ...]] = []  # the nodes (t, q, qd, qdd) of each integration step
+        taus: list[float] = []
+        touchdown = None
+        while touchdown is None and t_step < limit:
             run = self.flow.propagate(q, qd, h, keep_nodes=True)
             nodes = (run.nodes[0] + t_step, *run.nodes[1:])
-            landed = self.guard.crossed(t_step + h, run.q)
-            t_end = t_step + h
-            if landed:
-                t_end = self.guard.locate(nodes)
+            runs.append(nodes)
+            touchdown = self.guard.touchdown(nodes)
+            t_end = t_step + h if touchdown is None else touchdown
             # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
             # touchdown instant itself opens the next step (post-impact state).
-            taus = []
             while (tau := (self.sample_index + len(taus)) / self.rate - s.t) < t_end - 1e-12 or (
-                not landed and tau <= t_end
+                touchdown is None and tau <= t_end
             ):
                 taus.append(tau)
-            if taus:
-                sq, sqd = hermite_samples(nodes, np.array(taus))
-                for tau, q_s, qd_s in zip(taus, sq, sqd):
-                    sample = self._sample(s.t + tau, tau, q_s, qd_s)
-                    samples.append(sample)
-                    self.sample_index += 1
-                    fall = self._fall(sample)
-                    if fall:
-                        return StepOutcome(samples, None, fall)
-            if landed:
-                end = self.flow.propagate(q, qd, t_end - t_step)
-                try:
-                    return StepOutcome(samples, self._double_support(end.q, end.qd, t_end))
-                except Fall as fall:
-                    return StepOutcome(samples, None, str(fall))
             t_step, q, qd = t_end, run.q, run.qd
-        return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
+        samples, fall = self._samples(runs, taus)
+        if fall:
+            return StepOutcome(samples, None, fall)
+        if touchdown is None:
+            return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
+        t_start, q_start, qd_start = runs[-1][0][0], runs[-1][1][0], runs[-1][2][0]
+        end = self.flow.propagate(q_start, qd_start, touchdown - t_start)
+        try:
+            return StepOutcome(samples, self._double_support(end.q, end.qd, touchdown))
+        except Fall as exc:
+            return StepOutcome(samples, None, str(exc))
 
-    def _sample(self, t: float, t_step: float, q: np.ndarray, qd: np.ndarray) -> Sample:
+    def _samples(self, runs: list[tuple[np.ndarray, ...]], taus: list[float]) -> tuple[list[Sample], str]:
+        """The samples at times ``taus`` (s in the step) on the interpolant of the integration
+        steps ``runs`` (each sample on the step whose closed interval holds it first), evaluated
+        in one call, up to the first that falls; and the fall's reason ('' for none)."""
         s = self.state
-        qdd = self.flow.acceleration(q, qd)
-        return Sample(t, t_step, q, qd, ground_reaction_inverse_dynamics(self.bm, q, qd, qdd), s.step,
-                      s.stance_side, s.stance_foot)
+        samples: list[Sample] = []
+        if not taus:
+            return samples, ""
+        nodes = tuple(np.concatenate([run[k][:1] for run in runs] + [runs[-1][k][1:]]) for k in range(4))
+        q, qd = hermite_samples(nodes, np.array(taus), side="left")
+        evaluated = self.samples.dynamics(q, qd)
+        for k, tau in enumerate(taus):
+            samples.append(Sample(s.t + tau, tau, q[k], qd[k], evaluated.grf[k], s.step, s.stance_side, s.stance_foot))
+            self.sample_index += 1
+            fall = self._fall(samples[-1], float(evaluated.lowest_link[k]))
+            if fall:
+                return samples, fall
+        return samples, ""
 
-    def _fall(self, sample: Sample) -> str:
+    def _fall(self, sample: Sample, lowest_link: float) -> str:
+        """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
+        lowest knee, hip, shoulder or hand."""
         if not sample.grf[2] > 0.0:
             return f"vertical ground reaction not positive ({sample.grf[2]:.3g} N) at t = {sample.t:.4f} s"
-        if sample.t_step > 0.05 * self.period and self._lowest_link(sample.q) < 0.0:
+        if sample.t_step > 0.05 * self.period and lowest_link < 0.0:
             return f"a link went below the ground at t = {sample.t:.4f} s"
         return ""
 
@@ -365,8 +366,11 @@ class Walk:
         while self.steps == 0 or walker.state.step < self.steps:
             s = walker.state
             outcome = walker.walk_step()
-            for sample in outcome.samples:
-                yield replace(sample, world=world.state(sample.q, sample.qd, s.stance_side, s.stance_foot))
+            if outcome.samples:
+                pictures = world.pictures(np.array([x.q for x in outcome.samples]),
+                                          np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
+                for k, sample in enumerate(outcome.samples):
+                    yield replace(sample, world=pictures.state(k))
             if outcome.touchdown is None:
                 t = outcome.samples[-1].t if outcome.samples else s.t
                 yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)

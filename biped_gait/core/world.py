@@ -4,8 +4,9 @@ to what visualization and other nodes need, with the right or left foot in stanc
 World frame: x forward, y left, z up, origin at the first stance foot's... lateral midline: the
 feet are at y = -/+ hip_half_width. With the left foot in stance the model is the mirror image
 of the robot (y -> -y): positions mirror, axial vectors (angular velocity, angular momentum)
-map to (-x, y, -z) of the model's, and the URDF's joints swap sides (``urdf.physical_joint_positions``).
-Link transforms are computed from the URDF by Pinocchio, as robot_state_publisher would.
+map to (-x, y, -z) of the model's, and the URDF's joints swap sides (``urdf.physical_joint_array``).
+Link transforms are computed from the URDF by Pinocchio, as robot_state_publisher would. Many
+instants are computed in one call (``WorldView.pictures``, in the compiled twin when it is built).
 """
 
 from __future__ import annotations
@@ -16,8 +17,9 @@ import numpy as np
 import pinocchio as pin
 
 from .hybrid import mirror_for
-from .model import BipedModel, cross
-from .urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
+from .model import BipedModel
+from .samples import JointPlacements, SampleEvaluator
+from .urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_array
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
@@ -51,26 +53,70 @@ class WorldState:
     link_transforms: list[Transform]
 
 
+@dataclass(frozen=True)
+class WorldPictures:
+    """Many instants of the walk in world terms, one per row, for one stance foot: what a
+    ``WorldState`` holds for one instant (SI units; quaternions x, y, z, w)."""
+
+    joint_positions: np.ndarray  # n x 7, PHYSICAL_JOINTS order (rad)
+    joint_velocities: np.ndarray  # n x 7 (rad/s)
+    pelvis_position: np.ndarray  # n x 3, world (m)
+    pelvis_quaternion: np.ndarray  # n x 4, pelvis in world
+    pelvis_linear_velocity: np.ndarray  # n x 3, in the pelvis frame (m/s)
+    pelvis_angular_velocity: np.ndarray  # n x 3, in the pelvis frame (rad/s)
+    stance_foot: np.ndarray  # 3, world (m)
+    com: np.ndarray  # n x 3, world (m)
+    momentum_about_foot: np.ndarray  # n x 3, kg m^2/s, world axes
+    momentum_about_com: np.ndarray  # n x 3
+    link_frames: tuple[tuple[str, str], ...]  # (parent, child) link of each moving URDF joint
+    link_translations: np.ndarray  # n x joints x 3: each joint's child link in its parent link (m)
+    link_quaternions: np.ndarray  # n x joints x 4
+
+    def __len__(self) -> int:
+        return len(self.pelvis_position)
+
+    def state(self, i: int) -> WorldState:
+        """The ``i``-th instant as a ``WorldState``."""
+        links = [Transform(WORLD_FRAME, BASE_FRAME, self.pelvis_position[i], self.pelvis_quaternion[i])]
+        links += [Transform(parent, child, translation, quaternion) for (parent, child), translation, quaternion
+                  in zip(self.link_frames, self.link_translations[i], self.link_quaternions[i])]
+        return WorldState(
+            joint_names=PHYSICAL_JOINTS,
+            joint_positions=self.joint_positions[i].tolist(),
+            joint_velocities=self.joint_velocities[i].tolist(),
+            pelvis_position=self.pelvis_position[i],
+            pelvis_quaternion=self.pelvis_quaternion[i],
+            pelvis_linear_velocity=self.pelvis_linear_velocity[i],
+            pelvis_angular_velocity=self.pelvis_angular_velocity[i],
+            stance_foot=self.stance_foot.copy(),
+            com=self.com[i],
+            momentum_about_foot=self.momentum_about_foot[i],
+            momentum_about_com=self.momentum_about_com[i],
+            link_transforms=links,
+        )
+
+
 def _quaternion(rotation: np.ndarray) -> np.ndarray:
     return pin.Quaternion(rotation).coeffs().copy()  # x, y, z, w
 
 
 class WorldView:
-    """Computes ``WorldState`` from model states; holds the URDF's Pinocchio model."""
+    """Computes ``WorldPictures`` and ``WorldState`` from model states; holds the URDF's Pinocchio
+    model. ``native``: evaluate in the compiled twin (``samples``; None: when it is built)."""
 
-    def __init__(self, bm: BipedModel) -> None:
+    def __init__(self, bm: BipedModel, native: bool | None = None) -> None:
         self.bm = bm
         self.urdf = make_urdf(bm.params)
         self.urdf_model = pin.buildModelFromXML(self.urdf)
-        self.urdf_data = self.urdf_model.createData()
-        self._pelvis = bm.single.getJointId("stance_hip")
-        self._index = {name: self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in PHYSICAL_JOINTS}
-        # (joint id, parent link, child link) of every moving joint, in the URDF model's order.
-        self._joints = [
-            (jid, BASE_FRAME if self.urdf_model.parents[jid] == 0 else self._link_of_joint(self.urdf_model.parents[jid]),
+        self.samples = SampleEvaluator(bm, native)
+        self.placements = JointPlacements(self.urdf_model, native)
+        self._columns = [self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in PHYSICAL_JOINTS]
+        # (parent link, child link) of every moving joint, in the URDF model's order.
+        self._frames = tuple(
+            (BASE_FRAME if self.urdf_model.parents[jid] == 0 else self._link_of_joint(self.urdf_model.parents[jid]),
              self._link_of_joint(jid))
             for jid in range(1, self.urdf_model.njoints)
-        ]
+        )
 
     def _link_of_joint(self, jid: int) -> str:
         """The URDF link whose frame is joint ``jid``'s frame (its child link)."""
@@ -88,39 +134,34 @@ class WorldView:
                 out.append(Transform(parent, frame.name, frame.placement.translation.copy(), _quaternion(frame.placement.rotation)))
         return out
 
-    def state(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray) -> WorldState:
-        """The world picture of model state (q, qd) with ``stance_side`` foot at ``stance_foot``."""
-        bm, model, data = self.bm, self.bm.single, self.bm.single_data
-        m = mirror_for(stance_side)
-        pin.forwardKinematics(model, data, q, qd)
-        pelvis = data.oMi[self._pelvis]
-        rotation = m @ pelvis.rotation @ m
-        velocity = pin.getVelocity(model, data, self._pelvis, pin.ReferenceFrame.LOCAL)
-        axial = -m if stance_side == "left" else np.eye(3)  # axial vectors under the mirror
-        xd = np.concatenate([np.zeros(3), qd])
-        p, h_foot, com = bm.momentum(q, xd)
-        h_com = h_foot - cross(com, p)
-        positions = physical_joint_positions(q, stance_side)
-        velocities = physical_joint_positions(qd, stance_side)
-        urdf_q = np.zeros(self.urdf_model.nq)
-        for name, value in positions.items():
-            urdf_q[self._index[name]] = value
-        pin.forwardKinematics(self.urdf_model, self.urdf_data, urdf_q)
-        links = [Transform(WORLD_FRAME, BASE_FRAME, stance_foot + m @ pelvis.translation, _quaternion(rotation))]
-        for jid, parent, child in self._joints:
-            placement = self.urdf_data.liMi[jid]
-            links.append(Transform(parent, child, placement.translation.copy(), _quaternion(placement.rotation)))
-        return WorldState(
-            joint_names=PHYSICAL_JOINTS,
-            joint_positions=[positions[n] for n in PHYSICAL_JOINTS],
-            joint_velocities=[velocities[n] for n in PHYSICAL_JOINTS],
-            pelvis_position=stance_foot + m @ pelvis.translation,
-            pelvis_quaternion=_quaternion(rotation),
-            pelvis_linear_velocity=m @ velocity.linear,
-            pelvis_angular_velocity=axial @ velocity.angular,
-            stance_foot=stance_foot.copy(),
-            com=stance_foot + m @ com,
-            momentum_about_foot=axial @ h_foot,
-            momentum_about_com=axial @ h_com,
-            link_transforms=links,
+    def pictures(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray) -> WorldPictures:
+        """The world pictures of model states (rows of ``q``, ``qd``) with the ``stance_side``
+        foot at ``stance_foot``, evaluated in one call."""
+        q, qd = np.atleast_2d(q), np.atleast_2d(qd)
+        mirror = np.diag(mirror_for(stance_side))  # positions: (x, y, z) -> (x, -/+ y, z)
+        axial = -mirror if stance_side == "left" else np.ones(3)  # axial vectors under the mirror
+        poses = self.samples.poses(q, qd, mirrored=stance_side == "left")
+        positions = physical_joint_array(q, stance_side)
+        urdf_q = np.zeros((len(q), self.urdf_model.nq))
+        urdf_q[:, self._columns] = positions
+        translations, quaternions = self.placements.local(urdf_q)
+        h_com = poses.angular_momentum - np.cross(poses.com, poses.momentum)
+        return WorldPictures(
+            joint_positions=positions,
+            joint_velocities=physical_joint_array(qd, stance_side),
+            pelvis_position=stance_foot + mirror * poses.pelvis_position,
+            pelvis_quaternion=poses.pelvis_quaternion,
+            pelvis_linear_velocity=mirror * poses.pelvis_linear_velocity,
+            pelvis_angular_velocity=axial * poses.pelvis_angular_velocity,
+            stance_foot=np.array(stance_foot, dtype=float),
+            com=stance_foot + mirror * poses.com,
+            momentum_about_foot=axial * poses.angular_momentum,
+            momentum_about_com=axial * h_com,
+            link_frames=self._frames,
+            link_translations=translations,
+            link_quaternions=quaternions,
         )
+
+    def state(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray) -> WorldState:
+        """The world picture of one model state (q, qd) with ``stance_side`` foot at ``stance_foot``."""
+        return self.pictures(q, qd, stance_side, stance_foot).state(0)
