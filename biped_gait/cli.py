@@ -133,6 +133,14 @@ def _parser() -> argparse.ArgumentParser:
                       "the smallest velocity correction s (paper comparison)")
     plan.add_argument("--effort", default="l1", choices=("l1", "l2"),
                       help="l1: W = sum |I| by LP/HiGHS (default); l2: sum I^2 by OSQP")
+    plan.add_argument("--friction", type=float, metavar="MU",
+                      help="friction coefficient on the double support's reaction impulses and the step's ground "
+                      "reaction (default: the parameter set's; inf: no cone)")
+    plan.add_argument("--rate-bound", type=float, default=math.inf, metavar="RAD_S",
+                      help="bound on the joint rates between the double support's sub-phases (rad/s), default none")
+    plan.add_argument("--effort-coordinates", default="joint", choices=("joint", "absolute"),
+                      help="the effort's reading: on joint angles (default, the paper's eq. 12) or on the links' "
+                      "absolute angles")
     plan.add_argument("--json", type=Path, help="write the full result (SI, radians) to this JSON file")
     urdf = sub.add_parser("urdf", help="print (or write) the URDF of the biped")
     urdf.add_argument("--params", default=DEFAULT_PARAMS, help="parameter set name or YAML file")
@@ -262,6 +270,9 @@ def main(argv: list[str] | None = None) -> int:
             mode=args.mode,
             closure=args.closure,
             effort=args.effort,
+            friction=args.friction,
+            rate_bound=args.rate_bound,
+            effort_coordinates=args.effort_coordinates,
         )
         result = planner.plan(request)
     except ValueError as exc:

@@ -234,15 +234,17 @@ class Atlas:
         try:
             with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
+                if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != model_fingerprint(params):
+                    raise AtlasError(f"the gait atlas {path} is stale (built for other parameters or model code): "
+                                     f"rebuild it with `{rebuild}`")
                 grid = Grid(data["step_lengths"], data["periods"], data["alphas"])
                 nodes = {name: data[name] for name in NODE_ARRAYS}
         except FileNotFoundError:
             raise AtlasError(f"no gait atlas at {path}: build it with `{rebuild}`") from None
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError):
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+            if isinstance(exc, AtlasError):
+                raise
             raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`") from None
-        if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != model_fingerprint(params):
-            raise AtlasError(f"the gait atlas {path} is stale (built for other parameters or model code): "
-                             f"rebuild it with `{rebuild}`")
         for name, (tail, _) in NODE_ARRAYS.items():
             if nodes[name].shape != grid.shape + tail:
                 raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`")

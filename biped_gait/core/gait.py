@@ -10,7 +10,7 @@ field list.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from .admissibility import Verdict, failure_message
 from .bvp import BvpSolution
 from .configurations import GaitMode
 from .gait_views import summary, to_dict, to_json
-from .impulses import ImpulseSolution
+from .impulses import EffortOptions, ImpulseSolution
 from .reports import StepFigures
 from .stability import Multipliers
 
@@ -26,7 +26,8 @@ from .stability import Multipliers
 @dataclass(frozen=True)
 class GaitProblem:
     """A validated gait request: L (m), T (s), alpha (rad), mode, parameter set name, closure
-    (``theta``/``slack``) and effort (``l1``/``l2``)."""
+    (``theta``/``slack``), effort (``l1``/``l2``) and how the impulses are chosen (friction
+    coefficient, joint-rate bound in rad/s, the effort's reading)."""
 
     step_length: float
     period: float
@@ -35,6 +36,7 @@ class GaitProblem:
     params: str
     closure: str
     effort: str
+    options: EffortOptions = EffortOptions()
 
 
 @dataclass(frozen=True)
@@ -46,7 +48,9 @@ class DoubleSupport:
     coordinates (after the slack correction, when that closure is used); ``slack``: s (rad/s);
     ``new_stance_foot``: the new stance tip (m); ``h_t_minus``/``h_t_plus``: yaw angular
     momentum (kg m^2/s) about the vertical through the old and the new stance foot, at T- and
-    T+; the tip speeds (m/s) that the LP's sign constraints bound (NaN when it failed).
+    T+; the tip speeds (m/s) that the LP's sign constraints bound; the friction coefficient each
+    reaction impulse needs (I_R1^-, I_R2, I_R2^+); the largest joint rate (rad/s, q3..q9) between
+    the sub-phases, in Xd^- and Xd^+ (NaN when the impulse problem failed).
     """
 
     impulses: ImpulseSolution
@@ -59,6 +63,8 @@ class DoubleSupport:
     swing_tip_vz_before_impact: float
     old_stance_tip_vz_after_impact: float
     new_stance_tip_speed_after: float
+    impulse_friction_ratios: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
+    max_intermediate_joint_rate: float = math.nan
 
 
 @dataclass(frozen=True)

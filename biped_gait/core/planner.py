@@ -28,7 +28,7 @@ from .continuation import continue_to
 from .flow import hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem
 from .hybrid import HybridStep
-from .impulses import EFFORTS, solve_impulses
+from .impulses import EFFORTS, EffortOptions, friction_ratios, solve_impulses
 from .model import BipedModel
 from .params import BipedParams, load_params
 from .reports import StepFigures, energy_drift, step_figures
@@ -43,7 +43,9 @@ BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm s
 class GaitRequest:
     """What to plan: step length L (m), period T (s), arm amplitude alpha (rad), gait mode (a
     ``GaitMode`` or its name, parsed here), parameter set (name or file; empty: the planner's),
-    closure (``theta``/``slack``), effort (``l1``/``l2``)."""
+    closure (``theta``/``slack``), effort (``l1``/``l2``); the impulses' friction coefficient
+    (None: the parameter set's; inf: no cone), the bound on the double support's joint rates
+    (rad/s; inf: none) and the effort's reading (``joint``/``absolute``)."""
 
     step_length: float
     period: float
@@ -52,6 +54,9 @@ class GaitRequest:
     params: str = ""
     closure: str = "theta"
     effort: str = "l1"
+    friction: float | None = None
+    rate_bound: float = math.inf
+    effort_coordinates: str = "joint"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "mode", GaitMode.parse(self.mode))
@@ -62,6 +67,13 @@ def _finite(name: str, value: object) -> float:
         raise ValueError(f"{name} must be a number, got {value!r}")
     if not math.isfinite(value):
         raise ValueError(f"{name} must be a finite number, got {value}")
+    return float(value)
+
+
+def _number(name: str, value: object) -> float:
+    """A number that may be infinite (a bound or coefficient that can be dropped)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise ValueError(f"{name} must be a number, got {value!r}")
     return float(value)
 
 
@@ -81,7 +93,9 @@ def validate_request(request: GaitRequest, params: BipedParams) -> GaitProblem:
         raise ValueError(f"unknown closure {request.closure!r}: use 'theta' or 'slack'")
     if request.effort not in EFFORTS:
         raise ValueError(f"unknown effort {request.effort!r}: use 'l1' or 'l2'")
-    return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort)
+    friction = params.friction if request.friction is None else _number("friction coefficient", request.friction)
+    options = EffortOptions(friction, _number("joint-rate bound", request.rate_bound), request.effort_coordinates)
+    return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort, options)
 
 
 class GaitPlanner:
@@ -190,7 +204,7 @@ class GaitPlanner:
         if step.converged:
             double_support = self._double_support(step, problem)
             figures = self._figures(step, problem.period)
-        verdict = judge(step, double_support.impulses if double_support else None, figures, self.params.friction)
+        verdict = judge(step, double_support.impulses if double_support else None, figures, problem.options.friction)
         stability = None
         if double_support is not None and double_support.impulses.success:
             stability = open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
@@ -207,7 +221,7 @@ class GaitPlanner:
             # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
             # eqs. (6)-(10) consistent.
             lp, slack = lp.reachable()
-        sol = solve_impulses(lp, problem.effort)
+        sol = solve_impulses(lp, problem.effort, problem.options)
         xd_b, xd_a = lp.xd_b, lp.xd_a
         new_foot = bm.swing_tip(q_t)
         origin = np.zeros(3)
@@ -227,6 +241,8 @@ class GaitPlanner:
             swing_tip_vz_before_impact=vz_before,
             old_stance_tip_vz_after_impact=vz_after,
             new_stance_tip_speed_after=speed_after,
+            impulse_friction_ratios=friction_ratios(sol.x),
+            max_intermediate_joint_rate=float(np.max(np.abs(np.concatenate([sol.xd_minus[5:], sol.xd_plus[5:]])))),
         )
 
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:

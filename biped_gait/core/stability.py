@@ -60,7 +60,6 @@ class PoincareMap:
                  i_plus: np.ndarray) -> None:
         self.hybrid, self.flow, self.period = hybrid, flow, period
         self.i_minus, self.i_plus = np.asarray(i_minus, float), np.asarray(i_plus, float)
-        self.guard = hybrid.guard(0.5 * period)
 
     def touchdown(self, q0: np.ndarray, qd0: np.ndarray, tol: float = 1e-13) -> tuple[float, np.ndarray, np.ndarray]:
         """The touchdown time tau (s) near T and the pre-impact state, by Newton's method on
@@ -68,8 +67,7 @@ class PoincareMap:
         tau = self.period
         for _ in range(20):
             run = self.flow.propagate(q0, qd0, tau)
-            height = self.guard.height(run.q)
-            rate = float(self.hybrid.bm.tip_jacobians(run.q)[1][2, 3:] @ run.qd)
+            (height,), (rate,) = self.hybrid.samples.swing_tip_motion(run.q[None], run.qd[None])
             if abs(height) < tol:
                 break
             tau -= height / rate

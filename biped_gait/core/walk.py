@@ -35,7 +35,7 @@ from . import newton
 from .configurations import GaitMode
 from .flow import hermite_samples
 from .hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
-from .impulses import solve_impulses
+from .impulses import EffortOptions, solve_impulses
 from .model import BipedModel
 from .params import load_params
 from .settings import DEFAULTS, Settings
@@ -46,7 +46,8 @@ from .world import WorldState, WorldView
 class PlannedOrbit:
     """What a walk needs of a plan: the parameter set (name or file), the gait's L (m), T (s),
     alpha (rad), mode, effort, the boundary configurations q0 and q_t (rad), the velocities
-    qd_a at the start and qd_b at the end of the step (rad/s), and the plan's verdict."""
+    qd_a at the start and qd_b at the end of the step (rad/s), the plan's verdict, and how its
+    impulses are chosen (friction cone, joint-rate bound, the effort's reading)."""
 
     params: str
     step_length: float
@@ -61,13 +62,14 @@ class PlannedOrbit:
     converged: bool = True
     admissible: bool = True
     reasons: tuple[str, ...] = ()
+    options: EffortOptions = EffortOptions()
 
     @classmethod
     def of(cls, gait) -> "PlannedOrbit":
         """The orbit of a solved ``gait.Gait``."""
         return cls(gait.problem.params, gait.step_length, gait.period, gait.arm_amplitude, gait.mode,
                    gait.problem.effort, gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b,
-                   gait.converged, gait.admissible, gait.reasons)
+                   gait.converged, gait.admissible, gait.reasons, gait.problem.options)
 
 
 class Fall(Exception):
@@ -269,7 +271,7 @@ class Walker:
         xd_a = problem.xd_a
         if not np.all(np.isfinite(xd_a)):
             raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
-        sol = solve_impulses(problem, self.orbit.effort)
+        sol = solve_impulses(problem, self.orbit.effort, self.orbit.options)
         if not sol.success:
             raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
         error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))

@@ -18,6 +18,7 @@ from biped_gait_interfaces.srv import PlanGait
 from ..core.configurations import GaitMode
 from ..core.gait import Gait
 from ..core.gait_views import FIELDS
+from ..core.impulses import EffortOptions
 from ..core.model import JOINT_NAMES
 from ..core.planner import GaitRequest
 from ..core.walk import PlannedOrbit
@@ -35,7 +36,8 @@ def mode_from_msg(code: int) -> GaitMode:
 
 
 def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
-    """The core's GaitRequest for a service request (empty strings take the defaults)."""
+    """The core's GaitRequest for a service request (empty strings and zeros take the defaults:
+    the parameter set's friction, no joint-rate bound, the joint reading of the effort)."""
     return GaitRequest(
         step_length=req.step_length,
         period=req.period,
@@ -44,13 +46,16 @@ def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
         params=req.params or default_params,
         closure=req.closure or "theta",
         effort=req.effort or "l1",
+        friction=req.friction or None,
+        rate_bound=req.rate_bound or math.inf,
+        effort_coordinates=req.effort_coordinates or "joint",
     )
 
 
 def request_key(request: GaitRequest) -> tuple:
     """Hashable identity of a request, for the planner's cache."""
-    return (request.step_length, request.period, request.arm_amplitude, request.mode.value,
-            request.params, request.closure, request.effort)
+    return (request.step_length, request.period, request.arm_amplitude, request.mode.value, request.params,
+            request.closure, request.effort, request.friction, request.rate_bound, request.effort_coordinates)
 
 
 def duration_msg(seconds: float) -> Duration:
@@ -106,4 +111,5 @@ def orbit_from_msg(msg: GaitPlan) -> PlannedOrbit:
         mode=mode_from_msg(msg.mode), effort=msg.effort, q0=np.array(msg.q0), q_t=np.array(msg.q_t),
         qd_a=np.array(msg.qd_a), qd_b=np.array(msg.qd_b), converged=msg.converged, admissible=msg.admissible,
         reasons=tuple(msg.reasons),
+        options=EffortOptions(msg.friction, msg.rate_bound, msg.effort_coordinates or "joint"),
     )
