@@ -24,7 +24,7 @@ from .arguments import OneLineParser, check_output_file, check_output_folder
 from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from .core.planner import GaitPlanner, GaitRequest
 from .core.urdf import make_urdf
-from .recording.recover import is_complete, recover
+from .recording.recover import check_mcap, is_complete, recover
 from .studies.executors import open_executor
 from .studies.figures import save, sweep_figures
 from .studies.optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
@@ -228,6 +228,7 @@ def _recover(args: argparse.Namespace) -> int:
     if not files or not files[0].is_file():
         raise ValueError(f"no MCAP file at {args.bag}")
     source = files[0]
+    check_mcap(source)
     name = source.stem.removesuffix("_0") + "_recovered"
     out = args.out or source.parent.parent / name / f"{name}_0.mcap"
     check_output_file(out, "--out")

@@ -32,13 +32,8 @@ def _qos(channel: Channel) -> list[dict]:
         return []
 
 
-def recover(path: str | Path, out: str | Path) -> int:
-    """Copy every whole record of a possibly truncated MCAP file into a complete one at ``out``.
-
-    Returns the number of messages recovered; what a killed writer had not yet written (its
-    open chunk) is lost, nothing else. Also writes ``metadata.yaml`` beside ``out``.
-    ``ValueError`` (one line) if ``path`` cannot be read or is not an MCAP file.
-    """
+def check_mcap(path: str | Path) -> None:
+    """``ValueError`` (one line) if ``path`` cannot be read or does not start as an MCAP file."""
     try:
         with open(path, "rb") as src:
             magic = src.read(len(MCAP0_MAGIC))
@@ -46,6 +41,16 @@ def recover(path: str | Path, out: str | Path) -> int:
         raise ValueError(f"{path}: {exc.strerror or exc}") from None
     if magic != MCAP0_MAGIC:
         raise ValueError(f"{path}: not an MCAP file")
+
+
+def recover(path: str | Path, out: str | Path) -> int:
+    """Copy every whole record of a possibly truncated MCAP file into a complete one at ``out``.
+
+    Returns the number of messages recovered; what a killed writer had not yet written (its
+    open chunk) is lost, nothing else. Also writes ``metadata.yaml`` beside ``out``.
+    ``ValueError`` (one line) if ``path`` cannot be read or is not an MCAP file.
+    """
+    check_mcap(path)
     schemas: dict[int, Schema] = {}
     channels: dict[int, Channel] = {}
     new_ids: dict[tuple[str, int], int] = {}  # ("schema"|"channel", old id) -> id in the new file
