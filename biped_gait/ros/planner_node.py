@@ -52,6 +52,7 @@ from .recorded import RecordedPublisher
 
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
+CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms)
 PARAMETERS = (
     Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
           f"{', '.join(shipped_param_names())} or the path of a YAML file"),
@@ -68,6 +69,30 @@ PARAMETERS = (
 )
 
 
+class InFlight:
+    """Counts the callbacks running (``with in_flight:``), so that closing can wait for them
+    before the node's handles go away."""
+
+    def __init__(self) -> None:
+        self._count = 0
+        self._idle = threading.Condition()
+
+    def __enter__(self) -> "InFlight":
+        with self._idle:
+            self._count += 1
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        with self._idle:
+            self._count -= 1
+            self._idle.notify_all()
+
+    def wait_idle(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for no callback to run; False if one still does."""
+        with self._idle:
+            return self._idle.wait_for(lambda: self._count == 0, timeout)
+
+
 class GaitPlannerNode(Node):
     """Serves gait plans and arm-swing optimizations computed by the core."""
 
@@ -81,6 +106,7 @@ class GaitPlannerNode(Node):
         self._cache_lock = threading.Lock()
         self._sequence = 0
         self._closing = threading.Event()
+        self._in_flight = InFlight()
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
         self.recorder: McapRecorder | None = None
@@ -128,6 +154,13 @@ class GaitPlannerNode(Node):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=PLAN_FRAME)
 
     def _on_plan_gait(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+        if self._closing.is_set():
+            response.success, response.message = False, "the planner is stopping"
+            return response
+        with self._in_flight:
+            return self._serve(request, response)
+
+    def _serve(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
         try:
             self._answer(request, response)
         except ValueError as exc:
@@ -187,6 +220,10 @@ class GaitPlannerNode(Node):
             self.get_logger().error(f"publishing or recording on {publisher.topic} failed: {clip(repr(exc))}")
 
     def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
+        with self._in_flight:
+            return self._optimize(goal_handle)
+
+    def _optimize(self, goal_handle) -> OptimizeArmSwing.Result:
         goal = goal_handle.request
         result = OptimizeArmSwing.Result()
         evaluated: list[tuple[float, float]] = []
@@ -195,6 +232,8 @@ class GaitPlannerNode(Node):
             effort = gait.W if gait.usable else math.nan
             evaluated.append((gait.arm_amplitude, effort))
             progress = min(0.99, len(evaluated) / expected)
+            if self._closing.is_set():
+                raise Canceled()
             goal_handle.publish_feedback(OptimizeArmSwing.Feedback(progress=progress, alpha=gait.arm_amplitude, effort=effort))
             if goal_handle.is_cancel_requested or self._closing.is_set():
                 raise Canceled()
@@ -230,9 +269,11 @@ class GaitPlannerNode(Node):
         return result
 
     def close(self) -> None:
-        """Stop an optimization in progress and finalize the MCAP recording (called at shutdown,
-        SIGINT and SIGTERM included); ``RecordingError`` if the file could not be finished."""
+        """Stop an optimization in progress, let the callback running end (a solve, at most
+        ``CLOSE_WAIT`` s), and finalize the MCAP recording (called at shutdown, SIGINT and SIGTERM
+        included); ``RecordingError`` if the file could not be finished."""
         self._closing.set()
+        self._in_flight.wait_idle(CLOSE_WAIT)
         if self.recorder is not None and not self.recorder.closed:
             self.recorder.close()
             rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")

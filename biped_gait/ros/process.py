@@ -38,7 +38,7 @@ from rclpy.utilities import remove_ros_args
 from ..recording.writer import RecordingError
 from .parameters import Param, check_parameters_file, help_text
 
-SPIN_PERIOD = 0.25  # s: the longest a stop request waits for the spin loop
+SPIN_PERIOD = 0.1  # s: the longest a stop request waits for the spin loop
 GRACE = 0.5  # s: how long callbacks still running at a stop are waited for
 
 
