@@ -20,12 +20,14 @@ import subprocess
 import sys
 import time
 import uuid
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import yaml
 from rclpy.action import ActionClient
 from rclpy.qos import QoSProfile
+from sensor_msgs.msg import JointState
 
 from biped_gait.recording.recover import is_complete
 from biped_gait.ros.client import ClientSide
@@ -61,6 +63,18 @@ def signal_and_time(proc: subprocess.Popen, sig: int) -> tuple[int, float]:
     start = time.monotonic()
     status = stop_node(proc, sig, timeout=20.0)
     return status, time.monotonic() - start
+
+
+def batches(tmp_path: Path, start) -> Iterator[list[tuple[Path, object]]]:
+    """``ROUNDS`` rounds in batches of ``BATCH``: each round a folder of its own and what
+    ``start(folder)`` returns for it."""
+    for first in range(0, ROUNDS, BATCH):
+        rounds = []
+        for i in range(first, min(first + BATCH, ROUNDS)):
+            where = tmp_path / f"round{i}"
+            where.mkdir()
+            rounds.append((where, start(where)))
+        yield rounds
 
 
 def wait_for(condition, timeout: float, what: str) -> None:
@@ -101,18 +115,15 @@ def simulator(where: Path, planner: str, *params: str) -> subprocess.Popen:
 def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
     """Each round: a recording planner busy with an optimization and a queue of uncached
     requests gets the signal; it ends within 2 s with status 0 and a finished recording."""
+    def start(where: Path) -> tuple[str, subprocess.Popen]:
+        name = f"faults_stop_planner_{uuid.uuid4().hex[:6]}"
+        return name, start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", f"record_dir:={where / 'bags'}",
+                                cwd=where)
+
     results = []
-    for first in range(0, ROUNDS, BATCH):
-        rounds = []
-        for i in range(first, min(first + BATCH, ROUNDS)):
-            where = tmp_path / f"round{i}"
-            where.mkdir()
-            name = f"faults_stop_planner_{uuid.uuid4().hex[:6]}"
-            proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", f"record_dir:={where / 'bags'}",
-                              cwd=where)
-            rounds.append((where, name, proc))
+    for rounds in batches(tmp_path, start):
         clients = []
-        for where, name, proc in rounds:
+        for where, (name, _) in rounds:
             client = side.node.create_client(PlanGait, f"/{name}/plan_gait")
             action = ActionClient(side.node, OptimizeArmSwing, f"/{name}/optimize_arm_swing")
             side.connect(client)
@@ -124,7 +135,7 @@ def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
                 client.call_async(PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.2 + 0.01 * k))
         settle = time.monotonic() + 0.5  # the requests reach the nodes, which start solving
         side.wait(lambda: time.monotonic() > settle)
-        for where, _, proc in rounds:
+        for where, (_, proc) in rounds:
             status, took = signal_and_time(proc, sig)
             log = log_of(where, "biped-gait-planner")
             results.append((status, took, finished_recording(where / "bags"), "Traceback" not in log))
@@ -138,24 +149,23 @@ def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
-def test_the_simulator_stops_cleanly_during_walks(planner, tmp_path, sig):
-    """Each round: a simulator walking in real time (a live subscriber of its own kind does not
-    matter here) gets the signal once it walks; it ends within 2 s, status 0, file finished."""
+def test_the_simulator_stops_cleanly_during_walks(planner, side, tmp_path, sig):
+    """Each round: a simulator walking in real time, with a live subscriber of its joint states,
+    gets the signal once it walks; it ends within 2 s, status 0, file finished."""
+    subscription = side.node.create_subscription(JointState, "/joint_states", lambda _msg: None, 10)
     results = []
-    for first in range(0, ROUNDS, BATCH):
-        rounds = []
-        for i in range(first, min(first + BATCH, ROUNDS)):
-            where = tmp_path / f"round{i}"
-            where.mkdir()
-            rounds.append((where, simulator(where, planner, "steps:=0", "real_time_factor:=1.0", "chunk_size:=4096")))
+    start = lambda where: simulator(where, planner, "steps:=0", "real_time_factor:=1.0", "chunk_size:=4096")  # noqa: E731
+    for rounds in batches(tmp_path, start):
         for where, proc in rounds:
             wait_for(lambda: "walking L =" in log_of(where, "biped-gait-simulator") or proc.poll() is not None, 90.0,
                      "the walk did not start")
-        time.sleep(0.3)
+        settle = time.monotonic() + 0.3
+        side.wait(lambda: time.monotonic() > settle)
         for where, proc in rounds:
             status, took = signal_and_time(proc, sig)
             log = log_of(where, "biped-gait-simulator")
             results.append((status, took, finished_recording(where / "bags"), "Traceback" not in log))
+    side.node.destroy_subscription(subscription)
     clean = sum(status == 0 and took < STOP_WITHIN and done and quiet for status, took, done, quiet in results)
     print(f"\nsimulator, {signal.Signals(sig).name} during walks: {clean} of {len(results)} clean stops; "
           f"slowest {max(t for _, t, _, _ in results):.2f} s")

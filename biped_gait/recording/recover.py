@@ -6,12 +6,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import MCAP0_MAGIC, Writer as RawWriter
 
+from ..core.yaml_files import parse_yaml
 from .metadata import TopicRecord, write_metadata
 
 
@@ -27,8 +27,8 @@ def is_complete(path: str | Path) -> bool:
 def _qos(channel: Channel) -> list[dict]:
     """The offered QoS profiles a channel's metadata carries (as the recorder writes them)."""
     try:
-        return list(yaml.safe_load(channel.metadata.get("offered_qos_profiles", "")) or [])
-    except yaml.YAMLError:
+        return list(parse_yaml(channel.metadata.get("offered_qos_profiles", ""), "offered_qos_profiles") or [])
+    except (ValueError, TypeError):
         return []
 
 
