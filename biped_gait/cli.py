@@ -5,8 +5,10 @@ gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effor
 (build, show, check the gait atlases the planner starts from, ``atlas_cli``).
 Degrees at this edge; SI and radians inside.
 
-Errors in the input print one line on stderr and exit with status 2; a gait that does not
-converge or is not admissible is printed with its reasons and exits with status 1. An
+Errors in the input print one line on stderr and exit with status 2, output paths included
+(checked before any work: a folder that cannot be written, a sweep folder holding an earlier
+run without ``--force``); a gait that does not converge or is not admissible is printed with
+its reasons and exits with status 1, and so does a write that fails at the end (one line). An
 interrupted sweep (Ctrl-C) keeps the gaits it has in its files and exits with status 130.
 """
 
@@ -20,11 +22,11 @@ from pathlib import Path
 from tqdm import tqdm
 
 from . import atlas_cli
-from .arguments import OneLineParser
+from .arguments import OneLineParser, check_output_file, check_output_folder
 from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from .core.planner import GaitPlanner, GaitRequest
 from .core.urdf import make_urdf
-from .recording.recover import is_complete, recover
+from .recording.recover import check_mcap, is_complete, recover
 from .studies.executors import open_executor
 from .studies.figures import save, sweep_figures
 from .studies.optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
@@ -32,9 +34,10 @@ from .studies.maps import compute_maps, reading
 from .studies.results_page import maps_figures, write_results_page
 from .studies.study import FIG4_CASES, FIG5_CASE, run_study
 from .studies.sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
-from .studies.sweep_output import SweepFiles
+from .studies.sweep_output import SweepFiles, remove_previous
 
 INTERRUPTED = 130  # exit status after Ctrl-C, as shells report it
+STDOUT = "-"  # --json - writes to standard output
 
 
 def _add_params(parser: argparse.ArgumentParser) -> None:
@@ -45,7 +48,7 @@ def _add_params(parser: argparse.ArgumentParser) -> None:
 
 def _add_executor(parser: argparse.ArgumentParser) -> None:
     group = parser.add_mutually_exclusive_group()
-    group.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    group.add_argument("--workers", type=int, help="local worker processes (default: one per CPU; at most the CPUs)")
     group.add_argument("--scheduler", metavar="ADDRESS",
                        help="run on this Dask distributed scheduler (e.g. tcp://127.0.0.1:8786) instead")
 
@@ -78,7 +81,10 @@ def _study_parsers(sub) -> None:
     sweep.add_argument("--mode", nargs="+", default=["normal", "anti-normal"], help="gait modes, default both")
     _add_params(sweep)
     sweep.add_argument("--out", type=Path, default=Path("sweep-results"), metavar="DIR",
-                       help="output folder (sweep.csv, sweep.json, W_vs_alpha_*.png), default sweep-results")
+                       help="output folder (sweep.csv, sweep.json, W_vs_*.png), default sweep-results; it must be "
+                       "empty unless --force")
+    sweep.add_argument("--force", action="store_true", help="write into a non-empty --out folder, replacing the files "
+                       "of an earlier sweep there")
     _add_executor(sweep)
     sweep.add_argument("--yes", action="store_true", help=f"run a sweep of more than {MAX_CASES} gaits")
 
@@ -141,7 +147,8 @@ def _parser() -> argparse.ArgumentParser:
     plan.add_argument("--effort-coordinates", default="joint", choices=("joint", "absolute"),
                       help="the effort's reading: on joint angles (default, the paper's eq. 12) or on the links' "
                       "absolute angles")
-    plan.add_argument("--json", type=Path, help="write the full result (SI, radians) to this JSON file")
+    plan.add_argument("--json", type=Path, help="write the full result (SI, radians) to this JSON file ('-': "
+                      "standard output, the summary then goes to standard error)")
     urdf = sub.add_parser("urdf", help="print (or write) the URDF of the biped")
     urdf.add_argument("--params", default=DEFAULT_PARAMS, help="parameter set name or YAML file")
     urdf.add_argument("--output", type=Path, help="write to this file instead of stdout")
@@ -164,6 +171,9 @@ def _sweep(args: argparse.Namespace) -> int:
         args.mode,
         confirmed=args.yes,
     )
+    check_output_folder(args.out, "--out", args.force)
+    if args.force:
+        remove_previous(args.out)
     files = SweepFiles(args.out, grid)
     try:
         with open_executor(args.workers, args.scheduler) as executor, files, tqdm(
@@ -203,6 +213,7 @@ def _figure(args: argparse.Namespace) -> int:
     params = load_params(args.params)
     fig4 = args.name == "fig4"
     out = args.out or Path(f"{args.name}.png")
+    check_output_file(out, "--out")
     with open_executor(args.workers, args.scheduler) as executor:
         [study] = run_study(executor, [params], FIG4_CASES if fig4 else (FIG5_CASE,), curves=fig4,
                             coarse_step=math.radians(args.alpha_step))
@@ -214,6 +225,7 @@ def _figure(args: argparse.Namespace) -> int:
 
 
 def _results_page(args: argparse.Namespace) -> int:
+    check_output_file(args.out, "--out")
     with open_executor(args.workers, args.scheduler) as executor:
         paths = write_results_page(args.out, executor, math.radians(args.alpha_step))
     print("written: " + ", ".join(str(p) for p in paths))
@@ -235,8 +247,10 @@ def _recover(args: argparse.Namespace) -> int:
     if not files or not files[0].is_file():
         raise ValueError(f"no MCAP file at {args.bag}")
     source = files[0]
+    check_mcap(source)
     name = source.stem.removesuffix("_0") + "_recovered"
     out = args.out or source.parent.parent / name / f"{name}_0.mcap"
+    check_output_file(out, "--out")
     out.parent.mkdir(parents=True, exist_ok=True)
     count = recover(source, out)
     state = "was complete" if is_complete(source) else "was truncated"
@@ -254,14 +268,20 @@ def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         if args.command == "urdf":
+            if args.output:
+                check_output_file(args.output, "--output")
             text = make_urdf(load_params(args.params))
             if args.output:
+                args.output.parent.mkdir(parents=True, exist_ok=True)
                 args.output.write_text(text)
             else:
                 sys.stdout.write(text)
             return 0
         if args.command in STUDY_COMMANDS:
             return STUDY_COMMANDS[args.command](args)
+        to_stdout = args.json is not None and str(args.json) == STDOUT
+        if args.json is not None and not to_stdout:
+            check_output_file(args.json, "--json")
         planner = GaitPlanner(args.params)
         request = GaitRequest(
             step_length=args.step_length,
@@ -281,10 +301,20 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("biped-gait: interrupted", file=sys.stderr)
         return INTERRUPTED
-    print(result.summary())
-    if args.json:
-        args.json.write_text(result.to_json())
-        print(f"result written to {args.json}")
+    except OSError as exc:  # a write at the end failed (disk full, folder removed meanwhile)
+        print(f"biped-gait: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
+    print(result.summary(), file=sys.stderr if to_stdout else sys.stdout)
+    try:
+        if to_stdout:
+            sys.stdout.write(result.to_json() + "\n")
+        elif args.json:
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(result.to_json())
+            print(f"result written to {args.json}")
+    except OSError as exc:
+        print(f"biped-gait: error: cannot write {args.json}: {exc.strerror or exc}", file=sys.stderr)
+        return 1
     return 0 if result.admissible else 1
 
 

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.studies.figures import effort_figure, momentum_figure, save, sweep_figures, two_step_momentum
+from biped_gait.studies.figures import (effort_figure, momentum_figure, period_figure, save, sweep_figures,
+                                        two_step_momentum)
 from biped_gait.studies.sweep import solve_chain
 
 from .conftest import DEFAULT_REQUEST
@@ -55,3 +56,18 @@ def test_sweep_figures_one_per_step_length_and_period(tmp_path, planner):
     fig = effort_figure(results)
     assert [line.get_linestyle() for line in fig.axes[0].lines] == ["--", "--"]  # anti-normal dashed
     assert math.isclose(fig.axes[0].lines[1].get_ydata()[1], results[3].W)
+
+
+def test_a_period_sweep_draws_w_against_t_with_the_marks_in_the_legend(tmp_path, planner):
+    """One alpha, three periods: a W-vs-T figure (no one-point W-vs-alpha plots); a gait drawn
+    as not admissible has its legend entry."""
+    results = [planner.plan(dataclasses.replace(DEFAULT_REQUEST, period=period)) for period in (0.44, 0.45, 0.46)]
+    results[1] = dataclasses.replace(results[1], verdict=dataclasses.replace(results[1].verdict, admissible=False,
+                                                                              reasons=("made up",)))
+    paths = sweep_figures(results, tmp_path)
+    assert [p.name for p in paths] == ["W_vs_T_L0.450_alpha23.50.png"]
+    fig = period_figure(results)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "step period T (s)" and np.allclose(ax.lines[0].get_xdata(), [0.44, 0.45, 0.46])
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "not admissible (its W)" in labels and "normal" in labels

@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
-import yaml
+from .text import clip
+from .yaml_files import parse_yaml, read_yaml_text
 
 DEFAULT_PARAMS = "aoustin2013"
 DEFAULT_FRICTION = 0.5  # Coulomb coefficient of the foot on the floor when a file gives none
@@ -71,25 +72,30 @@ def shipped_param_names() -> list[str]:
 def load_params(name_or_path: str | Path | None = None) -> BipedParams:
     """Load a shipped parameter set by name, or a YAML file by path (``None``: the default).
 
-    Raises ``ValueError`` with a one-line message for an unknown name, an unreadable file, or
-    missing or non-physical values.
+    Raises ``ValueError`` with a one-line message for an unknown name, an unreadable file (one
+    larger than ``core.yaml_files.MAX_YAML_BYTES``, not UTF-8, or nested too deeply included),
+    or missing or non-physical values.
     """
     key = DEFAULT_PARAMS if name_or_path in (None, "") else str(name_or_path)
     if key in shipped_param_names():
         text = resources.files("biped_gait.core.data").joinpath(f"{key}.yaml").read_text()
         source = key
-    elif Path(key).is_file():
-        text = Path(key).read_text()
+    elif _is_file(key):
+        text = read_yaml_text(key, "parameter file")
         source = key
     else:
         raise ValueError(
-            f"unknown parameter set {key!r}: give one of {', '.join(shipped_param_names())} or a YAML file path"
+            f"unknown parameter set {clip(repr(key))}: give one of {', '.join(shipped_param_names())} or a YAML file path"
         )
+    return params_from_dict(parse_yaml(text, f"parameter file {source}"), source)
+
+
+def _is_file(key: str) -> bool:
+    """True if ``key`` names a regular file (False for names the OS refuses, e.g. too long)."""
     try:
-        raw = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ValueError(f"parameter file {source}: not valid YAML ({exc.__class__.__name__})") from None
-    return params_from_dict(raw, source)
+        return Path(key).is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def params_from_dict(raw: object, source: str = "<dict>") -> BipedParams:

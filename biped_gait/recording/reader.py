@@ -12,14 +12,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
 from mcap.reader import make_reader
 from mcap.records import Channel, Message
 from mcap.summary import Summary
 from mcap.writer import MCAP0_MAGIC
 from mcap_ros2.decoder import DecoderFactory
 
+from ..core.yaml_files import load_yaml_file, parse_yaml
 from .metadata import METADATA_NAME
+
+MAX_METADATA_BYTES = 16 * 1024 * 1024  # a metadata.yaml is a few kB per topic
 
 
 class BagError(ValueError):
@@ -96,7 +98,7 @@ class Bag:
 def _profiles(value) -> list[dict]:
     """rosbag2 writes the offered profiles as a YAML list, older versions as YAML text."""
     if isinstance(value, str):
-        value = yaml.safe_load(value)
+        value = parse_yaml(value, "offered_qos_profiles")
     return list(value or [])
 
 
@@ -153,8 +155,8 @@ def _metadata(directory: Path) -> dict:
     if not path.is_file():
         return {}
     try:
-        info = yaml.safe_load(path.read_text())["rosbag2_bagfile_information"]
-    except (OSError, yaml.YAMLError, TypeError, KeyError):
+        info = load_yaml_file(path, "metadata file", MAX_METADATA_BYTES)["rosbag2_bagfile_information"]
+    except (ValueError, TypeError, KeyError):
         raise BagError(f"{path}: not a rosbag2 metadata file") from None
     return info if isinstance(info, dict) else {}
 

@@ -1,16 +1,17 @@
 """Repairing a recording whose writer was killed: every whole record of a truncated MCAP file
-copied into a complete one, with rosbag2 metadata (QoS from the channels' metadata)."""
+copied into a complete one, with rosbag2 metadata (every topic's QoS profiles and type hash
+from the channels' metadata, where the recorder keeps them, as rosbag2's MCAP plugin does)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
 from mcap.reader import make_reader
 from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
-from mcap.writer import Writer as RawWriter
+from mcap.writer import MCAP0_MAGIC, Writer as RawWriter
 
+from ..core.yaml_files import parse_yaml
 from .metadata import TopicRecord, write_metadata
 
 
@@ -26,9 +27,20 @@ def is_complete(path: str | Path) -> bool:
 def _qos(channel: Channel) -> list[dict]:
     """The offered QoS profiles a channel's metadata carries (as the recorder writes them)."""
     try:
-        return list(yaml.safe_load(channel.metadata.get("offered_qos_profiles", "")) or [])
-    except yaml.YAMLError:
+        return list(parse_yaml(channel.metadata.get("offered_qos_profiles", ""), "offered_qos_profiles") or [])
+    except (ValueError, TypeError):
         return []
+
+
+def check_mcap(path: str | Path) -> None:
+    """``ValueError`` (one line) if ``path`` cannot be read or does not start as an MCAP file."""
+    try:
+        with open(path, "rb") as src:
+            magic = src.read(len(MCAP0_MAGIC))
+    except OSError as exc:
+        raise ValueError(f"{path}: {exc.strerror or exc}") from None
+    if magic != MCAP0_MAGIC:
+        raise ValueError(f"{path}: not an MCAP file")
 
 
 def recover(path: str | Path, out: str | Path) -> int:
@@ -36,7 +48,9 @@ def recover(path: str | Path, out: str | Path) -> int:
 
     Returns the number of messages recovered; what a killed writer had not yet written (its
     open chunk) is lost, nothing else. Also writes ``metadata.yaml`` beside ``out``.
+    ``ValueError`` (one line) if ``path`` cannot be read or is not an MCAP file.
     """
+    check_mcap(path)
     schemas: dict[int, Schema] = {}
     channels: dict[int, Channel] = {}
     new_ids: dict[tuple[str, int], int] = {}  # ("schema"|"channel", old id) -> id in the new file
@@ -66,7 +80,8 @@ def recover(path: str | Path, out: str | Path) -> int:
             pass
         writer.finish()
     topics = {
-        ch.topic: TopicRecord(schemas[ch.schema_id].name if ch.schema_id in schemas else "", counts.get(cid, 0), _qos(ch))
+        ch.topic: TopicRecord(schemas[ch.schema_id].name if ch.schema_id in schemas else "", counts.get(cid, 0), _qos(ch),
+                              ch.metadata.get("topic_type_hash", ""))
         for cid, ch in channels.items()
     }
     write_metadata(Path(out).parent, Path(out).name, first or 0, last or 0, topics)

@@ -12,10 +12,17 @@ Chunks are bounded by size (``chunk_size`` bytes) and each closed chunk is flush
 at once, so a killed process loses at most its open chunk; ``recover`` rebuilds a complete file
 (index and summary) from what a killed writer left. ``close`` finalizes the file; the nodes call
 it on SIGINT and SIGTERM. Thread-safe: callbacks of a multi-threaded executor may write at once.
+
+Failures (a full disk, a folder that cannot be created, a bag folder deleted while recording)
+raise ``RecordingError`` with a one-line message, once; the recorder then stops recording and
+finishes the file as far as it got. So that a full disk still leaves room to finish it, the
+recorder holds a reserve file (``.space_reserve``, two chunks and 256 kB) in the bag folder from
+the start and frees it when a write fails or at ``close``.
 """
 
 from __future__ import annotations
 
+import os
 import threading
 import time
 from dataclasses import dataclass
@@ -27,8 +34,19 @@ from mcap.writer import Writer as RawWriter
 
 from .metadata import TopicRecord, write_metadata
 from .schemas import schema_text
+from .sink import FileSink, Opener, open_unbuffered
 
 DEFAULT_CHUNK_SIZE = 64 * 1024
+RESERVE_NAME = ".space_reserve"
+RESERVE_MARGIN = 256 * 1024  # bytes beyond two chunks: the summary and metadata.yaml
+
+
+class RecordingError(OSError):
+    """Recording failed (disk full, folder not writable or deleted); the message is one line."""
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or str(exc) or type(exc).__name__
 
 
 @dataclass
@@ -38,21 +56,38 @@ class _Channel:
 
 
 class McapRecorder:
-    """Write serialized messages to ``directory/name/name_0.mcap``; ``close`` adds metadata.yaml."""
+    """Write serialized messages to ``directory/name/name_0.mcap``; ``close`` adds metadata.yaml.
+    ``opener`` opens the MCAP file (unbuffered binary; tests inject one that fails).
+    ``FileExistsError`` if the bag folder exists; ``RecordingError`` if it cannot be made."""
 
-    def __init__(self, directory: str | Path, name: str, chunk_size: int = DEFAULT_CHUNK_SIZE) -> None:
+    def __init__(self, directory: str | Path, name: str, chunk_size: int = DEFAULT_CHUNK_SIZE,
+                 opener: Opener = open_unbuffered) -> None:
         self.bag_dir = Path(directory) / name
-        self.bag_dir.mkdir(parents=True, exist_ok=False)
         self.path = self.bag_dir / f"{name}_0.mcap"
-        self._file = open(self.path, "wb")
-        self._writer = RawWriter(self._file, chunk_size=chunk_size)
-        self._writer.start(profile="ros2", library="biped_gait")
+        self._reserve = self.bag_dir / RESERVE_NAME
+        try:
+            self.bag_dir.mkdir(parents=True, exist_ok=False)
+        except FileExistsError:
+            raise
+        except OSError as exc:
+            raise RecordingError(f"recording failed: cannot create {self.bag_dir}: {_reason(exc)}") from None
+        try:
+            with open(self._reserve, "wb") as reserve:
+                os.posix_fallocate(reserve.fileno(), 0, 2 * chunk_size + RESERVE_MARGIN)
+            self._sink = FileSink(self.path, opener)
+            self._writer = RawWriter(self._sink, chunk_size=chunk_size)
+            self._writer.start(profile="ros2", library="biped_gait")
+            self._sink.flush()
+        except OSError as exc:
+            self._release_reserve()
+            raise RecordingError(f"recording failed: cannot write in {self.bag_dir}: {_reason(exc)}") from None
         self._channels: dict[str, _Channel] = {}
         self._schemas: dict[str, int] = {}
         self._lock = threading.Lock()
         self._first: int | None = None
         self._last: int | None = None
         self.closed = False
+        self.failure = ""  # why recording stopped early ("" while it goes on or closed cleanly)
 
     def add_topic(self, topic: str, datatype: str, qos: list[dict], type_hash: str = "") -> None:
         """Register ``topic`` of type ``datatype`` ('pkg/msg/Type') with the QoS profiles its
@@ -65,14 +100,16 @@ class McapRecorder:
             if schema is None:
                 text = schema_text(datatype)
                 schema = self._schemas[datatype] = self._writer.register_schema(datatype, SchemaEncoding.ROS2, text.encode())
-            channel = self._writer.register_channel(
-                topic, MessageEncoding.CDR, schema, metadata={"offered_qos_profiles": yaml.safe_dump(qos)}
-            )
+            metadata = {"offered_qos_profiles": yaml.safe_dump(qos)}
+            if type_hash:
+                metadata["topic_type_hash"] = type_hash
+            channel = self._writer.register_channel(topic, MessageEncoding.CDR, schema, metadata=metadata)
             self._channels[topic] = _Channel(channel, TopicRecord(datatype, 0, list(qos), type_hash))
 
     def write(self, topic: str, data: bytes, stamp_ns: int | None = None) -> None:
         """Record the CDR bytes ``data`` on the registered ``topic`` at ``stamp_ns`` (default:
-        now, ns since the epoch); nothing once closed."""
+        now, ns since the epoch); nothing once closed. ``RecordingError`` (once) if the file
+        cannot take it: the recorder has then finished the file as far as it got."""
         stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
         with self._lock:
             if self.closed:
@@ -80,18 +117,62 @@ class McapRecorder:
             entry = self._channels[topic]
             self._writer.add_message(entry.id, log_time=stamp, data=data, publish_time=stamp,
                                      sequence=entry.record.count)
-            self._file.flush()  # a closed chunk reaches the disk now, not when Python's buffer fills
             entry.record.count += 1
             self._first = stamp if self._first is None else min(self._first, stamp)
             self._last = stamp if self._last is None else max(self._last, stamp)
+            written = self._sink.written
+            try:
+                self._sink.flush()  # a closed chunk reaches the disk now
+            except OSError as exc:
+                self._fail(_reason(exc))
+            if self._sink.written != written and self._sink.deleted:
+                self._fail(f"{self.bag_dir} was deleted while recording")
+
+    def _fail(self, reason: str) -> None:
+        """Stop recording: free the reserve, finish the file as far as it got, and raise."""
+        self.failure = f"recording failed: {self.path}: {reason}"
+        self.closed = True
+        self._release_reserve()
+        unfinished = self._finish()
+        if unfinished:
+            self.failure += f"; {unfinished}"
+        raise RecordingError(self.failure)
+
+    def _finish(self) -> str:
+        """Finish the MCAP file and write metadata.yaml; '' or what could not be done."""
+        try:
+            self._writer.finish()
+            self._sink.flush()
+        except OSError as exc:
+            self._sink.close()
+            return f"the file could not be finished ({_reason(exc)}): 'biped-gait recover' rebuilds what it holds"
+        self._sink.close()
+        try:
+            write_metadata(self.bag_dir, self.path.name, self._first or 0, self._last or 0,
+                           {topic: entry.record for topic, entry in self._channels.items()})
+        except OSError as exc:
+            return f"metadata.yaml could not be written ({_reason(exc)})"
+        return ""
+
+    def _release_reserve(self) -> None:
+        try:
+            self._reserve.unlink()
+        except OSError:
+            pass  # already gone (or the folder is)
 
     def close(self) -> None:
-        """Finalize the MCAP file (index, summary) and write metadata.yaml. Idempotent."""
+        """Finalize the MCAP file (index, summary) and write metadata.yaml. Idempotent.
+        ``RecordingError`` if that fails (the folder deleted, the disk full beyond the reserve)."""
         with self._lock:
             if self.closed:
                 return
             self.closed = True
-            self._writer.finish()
-            self._file.close()
-            write_metadata(self.bag_dir, self.path.name, self._first or 0, self._last or 0,
-                           {topic: entry.record for topic, entry in self._channels.items()})
+            self._release_reserve()
+            if self._sink.deleted:
+                self._sink.close()
+                self.failure = f"recording failed: {self.bag_dir} was deleted while recording"
+                raise RecordingError(self.failure)
+            unfinished = self._finish()
+            if unfinished:
+                self.failure = f"recording failed: {self.path}: {unfinished}"
+                raise RecordingError(self.failure)

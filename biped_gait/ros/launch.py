@@ -2,9 +2,12 @@
 launch file (the launch package is not installable here).
 
 Both nodes get ``--ros-args --params-file CONFIG`` (a ROS 2 parameters file with a section per
-node). Ctrl-C and SIGTERM are forwarded to both; when the simulator ends (its walk done, with
-``exit_when_done``), the planner is stopped. Exit status: 0 if both ended cleanly, else the
-first non-zero status. ``--analyze`` then runs ``biped-gait-analyze`` on the new walk recording.
+node), checked first (size, UTF-8, nesting, the shape rcl expects: a bad one is one line and
+exit status 2, no node started). The simulator gets ``exit_when_done: true`` unless the file
+says otherwise, so a walk of ``steps`` steps ends the launch. Ctrl-C and SIGTERM are forwarded
+to both; when the simulator ends, the planner is stopped, and when the planner ends, the
+simulator is. Exit status: 0 if both ended cleanly, 130 after Ctrl-C or SIGTERM, else the first
+non-zero status. ``--analyze`` then runs ``biped-gait-analyze`` on the new walk recording.
 """
 
 from __future__ import annotations
@@ -18,13 +21,15 @@ import sys
 import time
 from pathlib import Path
 
+from ..arguments import OneLineParser
 from .environment import DISCOVERY_VARIABLE
+from .parameters import check_parameters_file
 
 PLANNER, SIMULATOR = "biped-gait-planner", "biped-gait-simulator"
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="biped-gait-launch", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="biped-gait-launch", description=__doc__.splitlines()[0])
     parser.add_argument("--config", type=Path, help="ROS 2 parameters file with biped_gait_planner and "
                         "biped_gait_simulator sections (default: the nodes' own defaults)")
     parser.add_argument("--analyze", action="store_true", help="analyse the simulator's recording afterwards")
@@ -70,6 +75,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.config is not None and not args.config.is_file():
         print(f"biped-gait-launch: error: no config file {args.config}", file=sys.stderr)
         return 2
+    try:
+        if args.config is not None:
+            check_parameters_file(args.config)
+    except ValueError as exc:
+        print(f"biped-gait-launch: error: {exc}", file=sys.stderr)
+        return 2
     os.environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
     before = set(args.record_dir.glob("walk_*")) if args.record_dir.is_dir() else set()
     stopping = []
@@ -80,7 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     previous = {sig: signal.signal(sig, forward) for sig in (signal.SIGINT, signal.SIGTERM)}
     ros_args = ["--params-file", str(args.config)] if args.config else []
     planner = start_entry(PLANNER, ros_args, own_session=True)
-    simulator = start_entry(SIMULATOR, ros_args, own_session=True)
+    # the file's own exit_when_done, if any, comes later and wins
+    simulator = start_entry(SIMULATOR, ["-p", "exit_when_done:=true", *ros_args], own_session=True)
     try:
         while simulator.poll() is None and planner.poll() is None and not stopping:
             time.sleep(0.05)

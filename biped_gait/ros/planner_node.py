@@ -9,7 +9,10 @@
   ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``.
 
 A thin node: requests are converted and handed to the core (``GaitPlanner``); nothing a client
-sends can stop it (bad input gets ``success = false`` and a message).
+sends can stop it (bad input gets ``success = false`` and a message; text from a request is
+clipped in the log). The service's request queue holds ``queue_depth`` requests, so that a
+burst is answered, not dropped. A recording that fails (disk full, folder not writable or
+deleted) is one error line and the node keeps serving without recording.
 """
 
 from __future__ import annotations
@@ -25,10 +28,10 @@ import rclpy.logging  # after a signal, a logger of no node: rosout is gone with
 
 from dataclasses import replace
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
+from rclpy.qos import QoSProfile
 from std_msgs.msg import Header
 
 from biped_gait_interfaces.action import OptimizeArmSwing
@@ -38,15 +41,56 @@ from biped_gait_interfaces.srv import PlanGait
 from ..core.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from ..core.planner import GaitPlanner
 from ..core.settings import DEFAULTS
-from ..recording.writer import McapRecorder
+from ..core.text import clip
+from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
-from .process import run_node
+from .parameters import Param, declare
+from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
 from .recorded import RecordedPublisher
 
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
+CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms)
+PARAMETERS = (
+    Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
+          f"{', '.join(shipped_param_names())} or the path of a YAML file"),
+    Param("bvp_tolerance", DEFAULTS.tolerance, "bound on the BVP end-point residual (rad) and closure gap "
+          "(kg m^2/s)", 1e-14, 1e-6),
+    Param("max_iterations", DEFAULTS.max_iterations, "Newton iterations allowed per solve (count)", 1, 200),
+    Param("trajectory_samples", DEFAULTS.samples, "samples of the ballistic step in each plan's trajectory (count)",
+          2, 2001),
+    Param("cache_size", 256, "plans kept for identical requests (count)", 0, 100000),
+    Param("queue_depth", 1000, "requests each service and the action keep waiting (count): a burst beyond "
+          "this is dropped by the middleware", 10, 100000),
+    Param("record", True, "record requests, responses and plans to MCAP (true/false)"),
+    Param("record_dir", "bags", "directory of the recordings (path)"),
+)
+
+
+class InFlight:
+    """Counts the callbacks running (``with in_flight:``), so that closing can wait for them
+    before the node's handles go away."""
+
+    def __init__(self) -> None:
+        self._count = 0
+        self._idle = threading.Condition()
+
+    def __enter__(self) -> "InFlight":
+        with self._idle:
+            self._count += 1
+        return self
+
+    def __exit__(self, *_exc) -> None:
+        with self._idle:
+            self._count -= 1
+            self._idle.notify_all()
+
+    def wait_idle(self, timeout: float) -> bool:
+        """Wait up to ``timeout`` s for no callback to run; False if one still does."""
+        with self._idle:
+            return self._idle.wait_for(lambda: self._count == 0, timeout)
 
 
 class GaitPlannerNode(Node):
@@ -54,21 +98,25 @@ class GaitPlannerNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        self._declare_parameters()
-        value = self.get_parameter
-        self._default_params = value("default_params").value
+        value = declare(self, PARAMETERS)
+        self._default_params = value["default_params"]
         load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
         self._cache: OrderedDict[tuple, PlanGait.Response] = OrderedDict()
         self._cache_lock = threading.Lock()
         self._sequence = 0
-        self.settings = replace(DEFAULTS, samples=value("trajectory_samples").value, tolerance=value("bvp_tolerance").value,
-                                max_iterations=value("max_iterations").value)
+        self._closing = threading.Event()
+        self._in_flight = InFlight()
+        self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
+                                max_iterations=value["max_iterations"])
         self.recorder: McapRecorder | None = None
-        if value("record").value:
+        if value["record"]:
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
-            self.recorder = McapRecorder(value("record_dir").value, f"planner_{stamp}")
-            self.get_logger().info(f"recording to {self.recorder.path}")
+            try:
+                self.recorder = McapRecorder(value["record_dir"], f"planner_{stamp}")
+                self.get_logger().info(f"recording to {self.recorder.path}")
+            except RecordingError as exc:
+                self.get_logger().error(f"{exc}; serving without recording")
         self.plan_publisher = RecordedPublisher(self, GaitPlan, "~/gait_plan", LATCHED, self.recorder)
         self.call_recorder = RecordedPublisher(self, PlanGaitCall, "~/plan_gait/calls", EVENTS, self.recorder,
                                                publish=False)
@@ -76,8 +124,9 @@ class GaitPlannerNode(Node):
         # owns its planners (Pinocchio data are not shared between threads).
         self._service_group = MutuallyExclusiveCallbackGroup()
         self._action_group = MutuallyExclusiveCallbackGroup()
+        queue = QoSProfile(depth=value["queue_depth"])  # reliable, volatile, like the services' default
         self.plan_service = self.create_service(
-            PlanGait, "~/plan_gait", self._on_plan_gait, callback_group=self._service_group
+            PlanGait, "~/plan_gait", self._on_plan_gait, qos_profile=queue, callback_group=self._service_group
         )
         self.optimize_server = ActionServer(
             self,
@@ -87,34 +136,15 @@ class GaitPlannerNode(Node):
             goal_callback=lambda _goal: GoalResponse.ACCEPT,
             cancel_callback=lambda _goal: CancelResponse.ACCEPT,
             callback_group=self._action_group,
+            goal_service_qos_profile=queue,
+            result_service_qos_profile=queue,
+            cancel_service_qos_profile=queue,
         )
-
-    def _declare_parameters(self) -> None:
-        def desc(text: str, **ranges) -> ParameterDescriptor:
-            return ParameterDescriptor(description=text, **ranges)
-
-        self.declare_parameter("default_params", DEFAULT_PARAMS,
-                               desc(f"parameter set used when a request names none: {', '.join(shipped_param_names())} "
-                                    "or a YAML file", read_only=True))
-        self.declare_parameter("bvp_tolerance", DEFAULTS.tolerance, desc(
-            "bound on the BVP end-point residual (rad) and closure gap (kg m^2/s)",
-            floating_point_range=[FloatingPointRange(from_value=1e-14, to_value=1e-6)], read_only=True))
-        self.declare_parameter("max_iterations", DEFAULTS.max_iterations, desc(
-            "Newton iterations allowed per solve", integer_range=[IntegerRange(from_value=1, to_value=200, step=1)],
-            read_only=True))
-        self.declare_parameter("trajectory_samples", DEFAULTS.samples, desc(
-            "samples of the ballistic step in each plan's trajectory",
-            integer_range=[IntegerRange(from_value=2, to_value=2001, step=1)], read_only=True))
-        self.declare_parameter("cache_size", 256, desc(
-            "plans kept for identical requests", integer_range=[IntegerRange(from_value=0, to_value=100000, step=1)],
-            read_only=True))
-        self.declare_parameter("record", True, desc("record requests, responses and plans to MCAP", read_only=True))
-        self.declare_parameter("record_dir", "bags", desc("directory of the recordings", read_only=True))
 
     def _planner(self, params: str, group: str) -> GaitPlanner:
         """The planner of ``group`` for parameter set ``params`` (created on first use)."""
         if params != self._default_params and params not in shipped_param_names():
-            raise ValueError(f"unknown parameter set {params!r}: give one of {', '.join(shipped_param_names())}")
+            raise ValueError(f"unknown parameter set {clip(repr(params))}: give one of {', '.join(shipped_param_names())}")
         key = (group, params)
         if key not in self._planners:
             self._planners[key] = GaitPlanner(params, self.settings, on_note=self.get_logger().warning)
@@ -124,15 +154,22 @@ class GaitPlannerNode(Node):
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=PLAN_FRAME)
 
     def _on_plan_gait(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+        if self._closing.is_set():
+            response.success, response.message = False, "the planner is stopping"
+            return response
+        with self._in_flight:
+            return self._serve(request, response)
+
+    def _serve(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
         try:
             self._answer(request, response)
         except ValueError as exc:
             response.success, response.message = False, str(exc)
         except Exception as exc:  # noqa: BLE001  a solver failure must not take the node down
-            self.get_logger().error(f"plan_gait failed: {exc!r}")
-            response.success, response.message = False, f"internal error: {exc!r}"
+            self.get_logger().error(f"plan_gait failed: {clip(repr(exc))}")
+            response.success, response.message = False, f"internal error: {clip(repr(exc))}"
         if not response.success:
-            self.get_logger().warn(f"plan_gait refused: {response.message}")
+            self.get_logger().warn(f"plan_gait refused: {clip(response.message)}")
         self._record_call(request, response)
         return response
 
@@ -178,40 +215,55 @@ class GaitPlannerNode(Node):
         self._record(self.call_recorder, call)
 
     def _record(self, publisher: RecordedPublisher, msg) -> None:
-        """Publish (if live) and record ``msg``; a recording failure is logged, never raised."""
+        """Publish (if live) and record ``msg``; a failure is logged (a recording failure once:
+        the recorder stops), never raised."""
         try:
             publisher.publish(msg)
+        except RecordingError as exc:
+            self.get_logger().error(f"{exc}; serving without recording")
         except Exception as exc:  # noqa: BLE001  the answer matters more than its record
-            self.get_logger().error(f"publishing or recording on {publisher.topic} failed: {exc!r}")
+            self.get_logger().error(f"publishing or recording on {publisher.topic} failed: {clip(repr(exc))}")
 
     def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
+        with self._in_flight:
+            return self._optimize(goal_handle)
+
+    def _optimize(self, goal_handle) -> OptimizeArmSwing.Result:
         goal = goal_handle.request
         result = OptimizeArmSwing.Result()
         evaluated: list[tuple[float, float]] = []
-        expected = expected_solves((goal.alpha_min, goal.alpha_max))
 
         def on_result(gait) -> None:
             effort = gait.W if gait.usable else math.nan
             evaluated.append((gait.arm_amplitude, effort))
             progress = min(0.99, len(evaluated) / expected)
+            if self._closing.is_set():
+                raise Canceled()
             goal_handle.publish_feedback(OptimizeArmSwing.Feedback(progress=progress, alpha=gait.arm_amplitude, effort=effort))
-            if goal_handle.is_cancel_requested:
+            if goal_handle.is_cancel_requested or self._closing.is_set():
                 raise Canceled()
 
         try:
+            check_goal(goal)
+            expected = expected_solves((goal.alpha_min, goal.alpha_max))
             planner = self._planner(goal.params or self._default_params, "action")
             found = optimal_arm_amplitude(planner, goal.step_length, goal.period, mode_from_msg(goal.mode),
                                           (goal.alpha_min, goal.alpha_max), on_result=on_result)
         except Canceled:
-            goal_handle.canceled()
-            result.message = f"canceled after {len(evaluated)} gaits"
+            if goal_handle.is_cancel_requested:
+                goal_handle.canceled()
+                result.message = f"canceled after {len(evaluated)} gaits"
+            else:
+                goal_handle.abort()
+                result.message = f"the planner is stopping: aborted after {len(evaluated)} gaits"
         except (ValueError, NoAdmissibleGait) as exc:
             goal_handle.abort()
-            result.message = str(exc)
+            result.message = clip(str(exc) or type(exc).__name__)
+            self.get_logger().warn(f"optimize_arm_swing refused: {result.message}")
         except Exception as exc:  # noqa: BLE001  a solver failure must not take the node down
-            self.get_logger().error(f"optimize_arm_swing failed: {exc!r}")
+            self.get_logger().error(f"optimize_arm_swing failed: {clip(repr(exc))}")
             goal_handle.abort()
-            result.message = f"internal error: {exc!r}"
+            result.message = f"internal error: {clip(repr(exc))}"
         else:
             goal_handle.succeed()
             result.success, result.message, result.interior = True, found.describe(), found.interior
@@ -222,12 +274,31 @@ class GaitPlannerNode(Node):
         return result
 
     def close(self) -> None:
-        """Finalize the MCAP recording (called at shutdown, SIGINT and SIGTERM included)."""
-        if self.recorder is not None:
+        """Stop an optimization in progress, let the callback running end (a solve, at most
+        ``CLOSE_WAIT`` s), and finalize the MCAP recording (called at shutdown, SIGINT and SIGTERM
+        included); ``RecordingError`` if the file could not be finished."""
+        self._closing.set()
+        self._in_flight.wait_idle(CLOSE_WAIT)
+        if self.recorder is not None and not self.recorder.closed:
             self.recorder.close()
             rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
 
 
+def check_goal(goal: OptimizeArmSwing.Goal) -> None:
+    """``ValueError`` (one line) for a goal whose numbers are not finite or whose arm range is
+    not 0 <= alpha_min < alpha_max < pi/2 (rad); L and T are checked by the core."""
+    for name in ("step_length", "period", "alpha_min", "alpha_max"):
+        value = getattr(goal, name)
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be a finite number, got {value}")
+    if not 0.0 <= goal.alpha_min < goal.alpha_max < math.pi / 2:
+        raise ValueError(f"the arm range must satisfy 0 <= alpha_min < alpha_max < pi/2 rad, got "
+                         f"[{goal.alpha_min:g}, {goal.alpha_max:g}] rad")
+
+
 def main(args: list[str] | None = None) -> int:
-    """Entry point ``biped-gait-planner``: serve until SIGINT or SIGTERM."""
-    return run_node(GaitPlannerNode, "biped-gait-planner", args=args)
+    """Entry point ``biped-gait-planner``: serve until SIGINT or SIGTERM (exit status 0); a bad
+    argument or parameter value exits with status 2 and one line."""
+    usage = Usage("The gait planner: the plan_gait service, the optimize_arm_swing action and the "
+                  "gait_plan topic.", PARAMETERS)
+    return run_node(GaitPlannerNode, "biped-gait-planner", args=args, usage=usage)

@@ -8,7 +8,9 @@ service ``~/resume`` (std_srvs/Trigger) is called, e.g. once subscribers see the
 (DDS discovery between processes takes from milliseconds to seconds). Publishers have the
 message class of the recorded type and the QoS the recording's publishers offered
 (metadata.yaml; transient-local for ``/robot_description``). Topics whose type has no Python
-code here (``/tf``, ``/tf_static``: tf2_msgs) are skipped with one warning line.
+code here are skipped with one warning line; types are looked up only among the project's and
+the standard ROS 2 message packages (``TRUSTED_PACKAGES``): a file never makes the replay import
+a module it names (decoding for analysis uses the schema text in the file).
 
 Exit status: 0 at the end of the recording (``--loop``: replays until stopped) or on SIGINT /
 SIGTERM; 2 with one line on stderr for a missing or unreadable recording, unknown
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import re
 import sys
 import threading
 import time
@@ -40,17 +43,32 @@ NODE_NAME = "biped_gait_replay"
 DEFAULT_DEPTH = 100  # keep-last depth of topics recorded without QoS profiles
 
 
+# The packages whose message classes a replay may use: the project's own interfaces and the
+# standard ROS 2 message packages. A recording names its types in its schemas; no other module is
+# ever imported because a file names it.
+TRUSTED_PACKAGES = frozenset({
+    "biped_gait_interfaces", "tf2_msgs", "std_msgs", "builtin_interfaces", "geometry_msgs", "sensor_msgs",
+    "nav_msgs", "trajectory_msgs", "action_msgs", "rcl_interfaces", "diagnostic_msgs", "visualization_msgs",
+    "shape_msgs", "statistics_msgs", "rosgraph_msgs", "unique_identifier_msgs", "type_description_interfaces",
+})
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9]*$")
+
+
 def message_class(datatype: str) -> type | None:
-    """The rclpy message class of 'pkg/msg/Type' (or 'pkg/Type'); None if not installed here."""
+    """The rclpy message class of 'pkg/msg/Type' (or 'pkg/Type') for a package of
+    ``TRUSTED_PACKAGES``; None for any other name, or a type not installed here."""
     parts = datatype.split("/")
-    if len(parts) not in (2, 3):
+    if len(parts) not in (2, 3) or (len(parts) == 3 and parts[1] != "msg"):
         return None
     package, name = parts[0], parts[-1]
-    kind = parts[1] if len(parts) == 3 else "msg"
+    if package not in TRUSTED_PACKAGES or not _NAME.match(name):
+        return None
     try:
-        return getattr(importlib.import_module(f"{package}.{kind}"), name)
+        cls = getattr(importlib.import_module(f"{package}.msg"), name)
     except (ImportError, AttributeError):
         return None
+    is_message = isinstance(cls, type) and hasattr(type(cls), "__import_type_support__")
+    return cls if is_message and cls.__module__.startswith(f"{package}.msg") else None
 
 
 def _policy(enum: type, value: str | int | None):
@@ -118,6 +136,7 @@ class ReplayNode(Node):
         if skipped:
             self.get_logger().warning(f"not replayed (message type not available here): {', '.join(skipped)}")
         self.failed = False
+        self.exit_requested = threading.Event()
         self.published = 0
         self._stop = threading.Event()
         self._resumed = threading.Event()
@@ -155,8 +174,7 @@ class ReplayNode(Node):
                 self.failed = True
                 self.get_logger().error(f"replay failed: {exc}")
         finally:
-            if not self._stop.is_set():
-                self.context.try_shutdown()  # end the spin: the process exits
+            self.exit_requested.set()  # end the spin: the process exits
 
     def _play(self) -> bool:
         """Publish the recording once, each message when it is due: the start (monotonic clock,
@@ -171,6 +189,11 @@ class ReplayNode(Node):
             self.outputs[channel.topic].publish(message.data)
             self.published += 1
         return True
+
+    @property
+    def exit_status(self) -> int:
+        """1 if reading failed during playback, else 0."""
+        return 1 if self.failed else 0
 
     def close(self) -> None:
         """Stop publishing (end of the recording, SIGINT, SIGTERM)."""
@@ -205,14 +228,8 @@ def main(argv: list[str] | None = None) -> int:
     except BagError as exc:
         print(f"{PROGRAM}: error: {exc}", file=sys.stderr)
         return 2
-    nodes: list[ReplayNode] = []
-
-    def make_node() -> ReplayNode:
-        nodes.append(ReplayNode(bag, outputs, skipped, args.rate, args.loop, args.start_paused))
-        return nodes[0]
-
-    status = run_node(make_node, PROGRAM, threads=2, args=[PROGRAM, *argv])
-    return 1 if status == 0 and nodes and nodes[0].failed else status
+    return run_node(lambda: ReplayNode(bag, outputs, skipped, args.rate, args.loop, args.start_paused), PROGRAM,
+                    threads=2, args=[PROGRAM, *argv])
 
 
 if __name__ == "__main__":

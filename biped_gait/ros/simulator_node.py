@@ -15,8 +15,13 @@ pelvis in ``world``), and transient-local ``/robot_description`` (std_msgs/Strin
 bytes as were published.
 
 Outcomes: the walk finished (exit status 0), the robot fell, the walk could not start (a plan
-that cannot be walked), or no plan came (the planner did not answer, or refused): each its own
-event and log line, and exit status 1.
+that cannot be walked, a plan naming a parameter set that is neither shipped nor this node's
+own ``params`` file, a recording that cannot be made), no plan came (the planner did not
+answer, or refused), or the recording failed during the walk (disk full, folder deleted: the
+walk ends there, never as a fall): each its own log line (and event, but for the last), and
+exit status 1. Waits (for the planner, a plan on the topic, subscribers) are logged every
+``LOG_PERIOD`` s and end after ``wait_timeout`` s. With ``exit_when_done`` the process ends
+when the walk does; SIGINT and SIGTERM stop it at any time with the recording finished.
 """
 
 from __future__ import annotations
@@ -24,13 +29,13 @@ from __future__ import annotations
 import math
 import threading
 import time
+from dataclasses import replace
 from datetime import datetime, timezone
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
@@ -45,17 +50,48 @@ from biped_gait_interfaces.srv import PlanGait
 
 from ..core.configurations import GaitMode
 from ..core.pacing import Pacer
+from ..core.params import load_params, shipped_param_names
 from ..core.settings import DEFAULTS
+from ..core.text import clip
 from ..core.walk import CouldNotStart, Fell, Finished, Sample, Touchdown, Walk
 from ..recording import topics
-from ..recording.writer import DEFAULT_CHUNK_SIZE, McapRecorder
+from ..recording.writer import DEFAULT_CHUNK_SIZE, McapRecorder, RecordingError
 from .conversions import MODE_TO_MSG, orbit_from_msg
-from .process import run_node
+from .parameters import Param, declare
+from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
 from .recorded import RecordedPublisher
 from .walk_messages import event_msg, joint_state_msg, momentum_msg, odometry_msg, stamp_msg, tf_msg
 
 NODE_NAME = "biped_gait_simulator"
+LOG_PERIOD = 5.0  # s between the log lines of a long wait
+PARAMETERS = (
+    Param("plan_source", "service", "where the plan comes from: 'service' requests one, 'topic' walks the latest "
+          "one published", choices=("service", "topic")),
+    Param("plan_service", "/biped_gait_planner/plan_gait", "the planner's PlanGait service (name)"),
+    Param("plan_topic", "/biped_gait_planner/gait_plan", "the planner's GaitPlan topic (name)"),
+    Param("optimize_action", "/biped_gait_planner/optimize_arm_swing", "the planner's OptimizeArmSwing action (name)"),
+    Param("step_length", 0.45, "L of the requested plan (m)", 0.01, 2.0),
+    Param("period", 0.45, "T of the requested plan (s)", 0.01, 10.0),
+    Param("arm_amplitude", math.radians(23.5), "alpha of the requested plan (rad here; the biped-gait command "
+          "takes degrees); negative: ask the planner's action for the optimal one", -math.pi / 2, math.pi / 2),
+    Param("mode", "normal", "arm swing of the requested plan", choices=tuple(m.value for m in GaitMode)),
+    Param("params", "", "parameter set of the requested plan (a shipped name or a YAML file path); empty: the "
+          "planner's. A plan from the wire is walked only with a shipped set or this file"),
+    Param("steps", 20, "steps to walk (count); 0: until stopped", 0, 1000000),
+    Param("real_time_factor", 1.0, "simulated seconds per wall second; 0: as fast as possible", 0.0, 1000.0),
+    Param("publish_rate", 500.0, "samples per second of simulated time (Hz)", 1.0, 100000.0),
+    Param("reaim", True, "re-solve each step from the actual state, the open-loop gait being unstable (true/false)"),
+    Param("record", True, "record everything published to MCAP (true/false)"),
+    Param("record_dir", "bags", "directory of the recordings (path)"),
+    Param("chunk_size", DEFAULT_CHUNK_SIZE, "MCAP chunk size (bytes): at most this much is lost if the process is "
+          "killed", 1024, 64 * 1024 * 1024),
+    Param("exit_when_done", False, "end the process when the walk ends (true/false; the launcher sets it)"),
+    Param("wait_for_subscribers", 0, "start walking once /joint_states has this many subscribers (count; "
+          "discovery can take seconds)", 0, 100),
+    Param("wait_timeout", 60.0, "how long to wait for the planner's service or action, a plan on the topic, or "
+          "the subscribers (s); 0: no limit", 0.0, 86400.0),
+)
 
 
 class NoPlan(RuntimeError):
@@ -67,25 +103,29 @@ class SimulatorNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        self._declare_parameters()
-        value = lambda name: self.get_parameter(name).value  # noqa: E731
-        self.source = value("plan_source")
-        if self.source not in ("topic", "service"):
-            raise ValueError(f"plan_source must be 'topic' or 'service', got {self.source!r}")
-        self.rate = value("publish_rate")
-        self.rtf = value("real_time_factor")
-        self.steps = value("steps")
+        self.value = value = declare(self, PARAMETERS)
+        self.source = value["plan_source"]
+        self.rate = value["publish_rate"]
+        self.rtf = value["real_time_factor"]
+        self.steps = value["steps"]
+        self._own_params = value["params"]
+        self._own_params_name = load_params(self._own_params).name if self._own_params else ""
         self._group = ReentrantCallbackGroup()
         self._latest_plan: GaitPlan | None = None
         self._plan_ready = threading.Event()
         self._stop = threading.Event()
         self.finished = threading.Event()
+        self.exit_requested = threading.Event()
         self.failed = False
         self.recorder: McapRecorder | None = None
-        if value("record"):
+        self._recording_failure = ""
+        if value["record"]:
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
-            self.recorder = McapRecorder(value("record_dir"), f"walk_{stamp}", chunk_size=value("chunk_size"))
-            self.get_logger().info(f"recording to {self.recorder.bag_dir}")
+            try:
+                self.recorder = McapRecorder(value["record_dir"], f"walk_{stamp}", chunk_size=value["chunk_size"])
+                self.get_logger().info(f"recording to {self.recorder.bag_dir}")
+            except RecordingError as exc:
+                self._recording_failure = str(exc)
         publisher = lambda msg_type, topic, qos: RecordedPublisher(self, msg_type, topic, qos, self.recorder)  # noqa: E731
         self.pub_joints = publisher(JointState, topics.JOINT_STATES, STREAM)
         self.pub_odom = publisher(Odometry, topics.ODOM, STREAM)
@@ -95,77 +135,63 @@ class SimulatorNode(Node):
         self.pub_description = publisher(String, topics.ROBOT_DESCRIPTION, LATCHED)
         self.pub_tf_static = publisher(TFMessage, topics.TF_STATIC, LATCHED)
         if self.source == "topic":
-            self.create_subscription(GaitPlan, value("plan_topic"), self._on_plan, LATCHED, callback_group=self._group)
-        self.plan_client = self.create_client(PlanGait, value("plan_service"), callback_group=self._group)
-        self.optimize_client = ActionClient(self, OptimizeArmSwing, value("optimize_action"), callback_group=self._group)
+            self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
+        self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
+        self.optimize_client = ActionClient(self, OptimizeArmSwing, value["optimize_action"], callback_group=self._group)
         self._worker = threading.Thread(target=self._run, name="walker", daemon=True)
         self._worker.start()
 
-    def _declare_parameters(self) -> None:
-        def desc(text: str, **kw) -> ParameterDescriptor:
-            return ParameterDescriptor(description=text, read_only=True, **kw)
+    @property
+    def exit_status(self) -> int:
+        """0 if the walk finished or was stopped, 1 if it did not finish (see the module)."""
+        return 1 if self.failed else 0
 
-        positive = [FloatingPointRange(from_value=1.0, to_value=100000.0)]
-        self.declare_parameter("plan_source", "service", desc("'service': request a plan; 'topic': walk the latest plan published"))
-        self.declare_parameter("plan_service", "/biped_gait_planner/plan_gait", desc("the planner's PlanGait service"))
-        self.declare_parameter("plan_topic", "/biped_gait_planner/gait_plan", desc("the planner's GaitPlan topic"))
-        self.declare_parameter("optimize_action", "/biped_gait_planner/optimize_arm_swing", desc("the planner's action"))
-        self.declare_parameter("step_length", 0.45, desc("L (m) of the requested plan"))
-        self.declare_parameter("period", 0.45, desc("T (s) of the requested plan"))
-        self.declare_parameter("arm_amplitude", math.radians(23.5), desc("alpha (rad); negative: the optimal one"))
-        self.declare_parameter("mode", "normal", desc("'normal' or 'anti-normal'"))
-        self.declare_parameter("params", "", desc("parameter set of the requested plan; empty: the planner's"))
-        self.declare_parameter("steps", 20, desc("steps to walk; 0: until stopped",
-                                                 integer_range=[IntegerRange(from_value=0, to_value=1000000, step=1)]))
-        self.declare_parameter("real_time_factor", 1.0, desc(
-            "simulated seconds per wall second; 0: as fast as possible",
-            floating_point_range=[FloatingPointRange(from_value=0.0, to_value=1000.0)]))
-        self.declare_parameter("publish_rate", 500.0, desc("samples per second of simulated time", floating_point_range=positive))
-        self.declare_parameter("reaim", True, desc("re-solve each step from the actual state (the open-loop gait is unstable)"))
-        self.declare_parameter("record", True, desc("record everything published to MCAP"))
-        self.declare_parameter("record_dir", "bags", desc("directory of the recordings"))
-        self.declare_parameter("chunk_size", DEFAULT_CHUNK_SIZE, desc(
-            "MCAP chunk size (bytes): at most this much is lost if the process is killed",
-            integer_range=[IntegerRange(from_value=1024, to_value=64 * 1024 * 1024, step=1)]))
-        self.declare_parameter("exit_when_done", False, desc("end the process when the walk ends"))
-        self.declare_parameter("wait_for_subscribers", 0, desc(
-            "start walking once /joint_states has this many subscribers (discovery can take seconds)",
-            integer_range=[IntegerRange(from_value=0, to_value=100, step=1)]))
+    # Waiting -------------------------------------------------------------------------------
+    def _wait_until(self, ready, what: str, timeout: float) -> None:
+        """Return once ``ready()`` is true, logging every ``LOG_PERIOD`` s what it waits for;
+        ``NoPlan`` after ``timeout`` s (0: never) or when the node stops."""
+        start = time.monotonic()
+        said = start
+        while not ready():
+            now = time.monotonic()
+            if self._stop.is_set() or not self.context.ok():
+                raise NoPlan(f"stopped while waiting for {what}")
+            if timeout and now - start > timeout:
+                raise NoPlan(f"{what}: nothing after {timeout:g} s")
+            if now - said >= LOG_PERIOD:
+                said = now
+                self.get_logger().info(f"waiting for {what} ({now - start:.0f} s)")
+            time.sleep(0.002)
+
+    def _answer(self, future, what: str, timeout: float = 120.0):
+        """The future's result; ``NoPlan`` after ``timeout`` s or when the node stops."""
+        self._wait_until(future.done, f"the answer of {what}", timeout)
+        return future.result()
 
     # Plan acquisition ---------------------------------------------------------------------
     def _on_plan(self, msg: GaitPlan) -> None:
         self._latest_plan = msg
         self._plan_ready.set()
 
-    def _wait(self, future, what: str, timeout: float = 120.0):
-        """The future's result; ``NoPlan`` after ``timeout`` s or when the node stops."""
-        deadline = time.monotonic() + timeout
-        while not future.done():
-            if self._stop.is_set() or time.monotonic() > deadline:
-                raise NoPlan(f"no answer from {what}")
-            time.sleep(0.002)
-        return future.result()
-
     def _request_plan(self) -> GaitPlan:
-        value = lambda name: self.get_parameter(name).value  # noqa: E731
-        mode = MODE_TO_MSG[GaitMode.parse(value("mode"))]
-        if not self.plan_client.wait_for_service(timeout_sec=30.0):
-            raise NoPlan(f"the planner service {value('plan_service')} is not available")
-        alpha = value("arm_amplitude")
+        value, patience = self.value, self.value["wait_timeout"]
+        mode = MODE_TO_MSG[GaitMode.parse(value["mode"])]
+        self._wait_until(self.plan_client.service_is_ready, f"the planner service {value['plan_service']}", patience)
+        alpha = value["arm_amplitude"]
         if alpha < 0:
-            if not self.optimize_client.wait_for_server(timeout_sec=30.0):
-                raise NoPlan("the planner's optimize_arm_swing action is not available")
+            self._wait_until(self.optimize_client.server_is_ready,
+                             f"the planner's action {value['optimize_action']}", patience)
             low, high = DEFAULTS.arm_range
-            goal = OptimizeArmSwing.Goal(step_length=value("step_length"), period=value("period"), mode=mode,
-                                         alpha_min=low, alpha_max=high, params=value("params"))
-            handle = self._wait(self.optimize_client.send_goal_async(goal), "optimize_arm_swing")
-            result = self._wait(handle.get_result_async(), "optimize_arm_swing").result
+            goal = OptimizeArmSwing.Goal(step_length=value["step_length"], period=value["period"], mode=mode,
+                                         alpha_min=low, alpha_max=high, params=value["params"])
+            handle = self._answer(self.optimize_client.send_goal_async(goal), "optimize_arm_swing")
+            result = self._answer(handle.get_result_async(), "optimize_arm_swing").result
             if not result.success:
                 raise NoPlan(f"arm-swing optimization failed: {result.message}")
             alpha = result.alpha_opt
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
-        request = PlanGait.Request(step_length=value("step_length"), period=value("period"), arm_amplitude=alpha,
-                                   mode=mode, params=value("params"))
+        request = PlanGait.Request(step_length=value["step_length"], period=value["period"], arm_amplitude=alpha,
+                                   mode=mode, params=value["params"])
         response = self._call_plan(request)
         if not response.success:
             raise NoPlan(f"the planner refused: {response.message}")
@@ -178,7 +204,7 @@ class SimulatorNode(Node):
         for attempt in range(1, attempts + 1):
             future = self.plan_client.call_async(request)
             try:
-                return self._wait(future, "plan_gait", patience)
+                return self._answer(future, "plan_gait", patience)
             except NoPlan:
                 self.plan_client.remove_pending_request(future)
                 if self._stop.is_set():
@@ -189,28 +215,45 @@ class SimulatorNode(Node):
     def _obtain_plan(self) -> GaitPlan:
         if self.source == "service":
             return self._request_plan()
-        while not self._plan_ready.wait(0.1):
-            if self._stop.is_set():
-                raise NoPlan("stopped before a plan arrived")
+        topic = self.value["plan_topic"]
+        self._wait_until(self._plan_ready.is_set, f"a GaitPlan on {topic}", self.value["wait_timeout"])
         return self._latest_plan
+
+    def walkable_params(self, name: str) -> str:
+        """The parameter set to walk a plan with, from the plan's ``params`` field: a shipped
+        set, or this node's own ``params`` file (named by its path or by the name inside it),
+        never another path from the wire; ``NoPlan`` otherwise. '' is the default set."""
+        if self._own_params and name in (self._own_params, self._own_params_name):
+            return self._own_params
+        if name == "" or name in shipped_param_names():
+            return name
+        raise NoPlan(f"the plan's parameter set {clip(repr(name))} is neither a shipped set "
+                     f"({', '.join(shipped_param_names())}) nor this simulator's params file: refused")
 
     # The walk -----------------------------------------------------------------------------
     def _run(self) -> None:
         try:
+            if self._recording_failure:
+                self._not_started(self._recording_failure)
+                return
             try:
                 plan = self._obtain_plan()
+                params = self.walkable_params(plan.params)
             except NoPlan as exc:
                 self._not_started(f"no plan: {exc}")
             else:
-                self._walk(plan)
+                self._walk(plan, params)
+        except RecordingError as exc:
+            self.failed = True
+            self.get_logger().error(f"the walk ended: {exc}")
         except Exception as exc:  # noqa: BLE001  reported, and the node stays up for inspection
             if not self._stopping():  # SIGINT/SIGTERM shut the context down under a publish: a stop
                 self.failed = True
-                self.get_logger().error(f"walk aborted: {exc!r}")
+                self.get_logger().error(f"walk aborted: {clip(repr(exc))}")
         finally:
             self.finished.set()
-            if self.get_parameter("exit_when_done").value:
-                self.context.try_shutdown()
+            if self.value["exit_when_done"]:
+                self.exit_requested.set()
 
     def _stopping(self) -> bool:
         return self._stop.is_set() or not self.context.ok()
@@ -219,16 +262,19 @@ class SimulatorNode(Node):
         if self._stopping():
             return
         self.failed = True
-        self.get_logger().error(f"the walk did not start: {reason}")
+        self.get_logger().error(f"the walk did not start: {clip(reason, 1000)}")
         stamp = stamp_msg(self.get_clock().now().nanoseconds)
-        self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp, reason))
+        self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp, clip(reason, 1000)))
 
-    def _walk(self, plan: GaitPlan) -> None:
-        wanted = self.get_parameter("wait_for_subscribers").value
-        while self.pub_joints.subscription_count() < wanted:
-            if self._stop.wait(0.01) or not self.context.ok():
-                return
-        walk = Walk(orbit_from_msg(plan), self.rate, self.steps, reaim=self.get_parameter("reaim").value)
+    def _walk(self, plan: GaitPlan, params: str) -> None:
+        wanted = self.value["wait_for_subscribers"]
+        try:
+            self._wait_until(lambda: self.pub_joints.subscription_count() >= wanted,
+                             f"{wanted} subscriber(s) of {topics.JOINT_STATES}", self.value["wait_timeout"])
+        except NoPlan as exc:
+            self._not_started(str(exc))
+            return
+        walk = Walk(replace(orbit_from_msg(plan), params=params), self.rate, self.steps, reaim=self.value["reaim"])
         start_ns = self.get_clock().now().nanoseconds
         if walk.world is not None:
             stamp = stamp_msg(start_ns)
@@ -276,22 +322,23 @@ class SimulatorNode(Node):
                                 stamp_ns)
 
     def close(self) -> None:
-        """Stop the walk and finalize the recording (shutdown, SIGINT and SIGTERM included)."""
+        """Stop the walk and finalize the recording (shutdown, SIGINT and SIGTERM included);
+        ``RecordingError`` if the file could not be finished (the walk then counts as failed)."""
         self._stop.set()
-        self._worker.join(timeout=10.0)
-        if self.recorder is not None:
-            self.recorder.close()
+        self._worker.join(timeout=1.5)
+        if self.recorder is not None and not self.recorder.closed:
+            try:
+                self.recorder.close()
+            except RecordingError:
+                self.failed = True
+                raise
             rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.bag_dir}")
 
 
 def main(args: list[str] | None = None) -> int:
     """Entry point ``biped-gait-simulator``: walk, publish and record until done or stopped.
-    Exit status 1 if the walk did not finish (a fall, no plan, a plan that cannot be walked)."""
-    nodes: list[SimulatorNode] = []
-
-    def make() -> SimulatorNode:
-        nodes.append(SimulatorNode())
-        return nodes[-1]
-
-    status = run_node(make, "biped-gait-simulator", args=args)
-    return 1 if status == 0 and nodes and nodes[0].failed else status
+    Exit status 1 if the walk did not finish (a fall, no plan, a plan that cannot be walked, a
+    recording that failed), 2 for a bad argument or parameter value."""
+    usage = Usage("The simulator: walks a plan of the planner, publishing and recording joint states, "
+                  "odometry, angular momentum, transforms and gait events.", PARAMETERS)
+    return run_node(SimulatorNode, "biped-gait-simulator", args=args, usage=usage)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
@@ -36,13 +37,25 @@ def _ignore_sigint() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def check_workers(workers: int | None) -> int:
-    """Number of local worker processes: ``None`` means one per core; raises ``ValueError``
-    for a count below one."""
-    if workers is None:
+def available_cpus() -> int:
+    """CPUs this process may run on (its affinity, else the machine's count)."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except AttributeError:  # not on Linux
         return os.cpu_count() or 1
+
+
+def check_workers(workers: int | None) -> int:
+    """Number of local worker processes: ``None`` means one per CPU; more than the CPUs is
+    capped to them (one line on stderr says so); raises ``ValueError`` for a count below one."""
+    cpus = available_cpus()
+    if workers is None:
+        return cpus
     if workers < 1:
         raise ValueError(f"the number of workers must be at least 1, got {workers}")
+    if workers > cpus:
+        print(f"note: {workers} worker processes asked for, capped to the {cpus} CPUs available", file=sys.stderr)
+        return cpus
     return workers
 
 

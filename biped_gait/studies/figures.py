@@ -2,7 +2,8 @@
 
 - ``effort_figure``: W (N m s) against alpha (deg), one colour per (L, T), the normal gait
   solid and the anti-normal gait dashed, optima marked (the paper's Fig. 4; also the sweep's
-  per-(L, T) figures).
+  per-(L, T) figures); ``period_figure``: W against T, one colour per (L, alpha) (the figures
+  of a sweep over periods).
 - ``momentum_figure``: the yaw angular momentum (kg m^2/s) about the vertical through the
   current stance foot over two successive steps, normal against anti-normal (Fig. 5).
 """
@@ -10,12 +11,13 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from ..core.configurations import GaitMode
 from .optimize import ArmOptimum
@@ -39,6 +41,42 @@ def save(fig: Figure, path: Path) -> Path:
     return path
 
 
+def _effort_curves(ax, results: Sequence[Gait], group: Callable[[Gait], tuple],
+                   x: Callable[[Gait], float]) -> dict[tuple, str]:
+    """W against ``x`` (one curve per ``group`` and mode: normal solid, anti-normal dashed, a
+    colour per group); gaits that fail or are not admissible leave gaps, and those with a W are
+    marked with a grey x. Returns the colour of each group."""
+    colours = {key: f"C{i}" for i, key in enumerate(dict.fromkeys(group(r) for r in results))}
+    for key, colour in colours.items():
+        for mode, style in LINE_STYLES.items():
+            curve = sorted((r for r in results if group(r) == key and r.mode == mode), key=x)
+            if not curve:
+                continue
+            xs = [x(r) for r in curve]
+            ax.plot(xs, [r.W if r.usable else np.nan for r in curve], style, marker=".", markersize=3, color=colour)
+            bad = [(v, r.W) for v, r in zip(xs, curve) if not r.usable and math.isfinite(r.W)]
+            if bad:
+                ax.plot(*zip(*bad), "x", color="grey")
+    return colours
+
+
+def _legend(ax, results: Sequence[Gait], colours: dict[tuple, str], label: Callable[[tuple], str],
+            extra: Sequence[Line2D] = ()) -> None:
+    """A compact legend beside the axes (never over the data): a colour per group, the line
+    style per mode, the grey x if any gait is drawn as not admissible, and ``extra`` marks."""
+    handles = [Line2D([], [], color=colour, label=label(key)) for key, colour in colours.items()]
+    handles += [Line2D([], [], color="k", linestyle=style, label=mode) for mode, style in LINE_STYLES.items()
+                if any(r.mode == mode for r in results)]
+    if any(not r.usable and math.isfinite(r.W) for r in results):
+        handles.append(Line2D([], [], color="grey", marker="x", linestyle="none", label="not admissible (its W)"))
+    handles += list(extra)
+    if not any(r.usable for r in results):
+        ax.text(0.5, 0.5, "no admissible gait", transform=ax.transAxes, ha="center")
+    ax.set_ylabel("effort W (N m s)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(handles=handles, fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+
+
 def effort_figure(results: Sequence[Gait], optima: Sequence[ArmOptimum] = (), title: str = "") -> Figure:
     """W against alpha for every (L, T) in ``results``: normal solid, anti-normal dashed.
 
@@ -47,35 +85,32 @@ def effort_figure(results: Sequence[Gait], optima: Sequence[ArmOptimum] = (), ti
     (least W at an end point or admissibility edge: not an optimum).
     """
     fig, ax = _new_figure()
-    cases = list(dict.fromkeys((r.step_length, r.period) for r in results))
-    colours = {case: f"C{i}" for i, case in enumerate(cases)}
-    for (length, period), colour in colours.items():
-        for mode, style in LINE_STYLES.items():
-            curve = sorted(
-                (r for r in results if (r.step_length, r.period, r.mode) == (length, period, mode)),
-                key=lambda r: r.arm_amplitude,
-            )
-            if not curve:
-                continue
-            alpha = np.degrees([r.arm_amplitude for r in curve])
-            ax.plot(alpha, [r.W if r.usable else np.nan for r in curve], style, marker=".", markersize=3,
-                    color=colour, label=f"L = {length:g} m, T = {period:g} s, {mode}")
-            bad = [(a, r.W) for a, r in zip(alpha, curve) if not r.usable and math.isfinite(r.W)]
-            if bad:
-                ax.plot(*zip(*bad), "x", color="grey")
+    group = lambda r: (r.step_length, r.period)  # noqa: E731
+    label = lambda case: f"L = {case[0]:g} m, T = {case[1]:g} s"  # noqa: E731
+    colours = _effort_curves(ax, results, group, lambda r: math.degrees(r.arm_amplitude))
+    marks = []
     for opt in optima:
         colour = colours.get((opt.gait.step_length, opt.gait.period), "k")
         face = colour if opt.interior else "none"
         what = "optimum" if opt.interior else f"least W ({opt.where})"
-        ax.plot(math.degrees(opt.alpha), opt.W, "o", markersize=7, color=colour, markerfacecolor=face,
-                label=f"{what} {math.degrees(opt.alpha):.1f} deg, W = {opt.W:.2f}")
-    if not any(r.usable for r in results):
-        ax.text(0.5, 0.5, "no admissible gait", transform=ax.transAxes, ha="center")
+        marks += ax.plot(math.degrees(opt.alpha), opt.W, "o", markersize=7, color=colour, markerfacecolor=face,
+                         label=f"{what} {math.degrees(opt.alpha):.1f} deg, W = {opt.W:.2f}")
     ax.set_xlabel("arm amplitude alpha (deg)")
-    ax.set_ylabel("effort W (N m s)")
     ax.set_title(title or "Effort of the double support against the arm amplitude")
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small", loc="center left", bbox_to_anchor=(1.01, 0.5))
+    _legend(ax, results, colours, label, marks)
+    return fig
+
+
+def period_figure(results: Sequence[Gait], title: str = "") -> Figure:
+    """W against the period T for every (L, alpha) in ``results``: normal solid, anti-normal
+    dashed; gaits that fail or are not admissible as in ``effort_figure``."""
+    fig, ax = _new_figure()
+    group = lambda r: (r.step_length, r.arm_amplitude)  # noqa: E731
+    label = lambda case: f"L = {case[0]:g} m, alpha = {math.degrees(case[1]):.4g} deg"  # noqa: E731
+    colours = _effort_curves(ax, results, group, lambda r: r.period)
+    ax.set_xlabel("step period T (s)")
+    ax.set_title(title or "Effort of the double support against the step period")
+    _legend(ax, results, colours, label)
     return fig
 
 
@@ -109,11 +144,28 @@ def momentum_figure(normal: Gait, anti_normal: Gait) -> Figure:
 
 
 def sweep_figures(results: Sequence[Gait], out_dir: Path) -> list[Path]:
-    """One ``W_vs_alpha_L{L}_T{T}.png`` per (L, T) of a sweep in ``out_dir``; returns the paths."""
+    """The figures of a sweep in ``out_dir``; returns the paths: ``W_vs_alpha_L{L}_T{T}.png``
+    per (L, T) swept over two or more alphas, ``W_vs_T_L{L}_alpha{deg}.png`` per (L, alpha)
+    swept over two or more periods; if neither, the W-vs-alpha points per (L, T)."""
+    def groups(key) -> dict[tuple, list[Gait]]:
+        out: dict[tuple, list[Gait]] = {}
+        for r in results:
+            out.setdefault(key(r), []).append(r)
+        return out
+
+    def count(case: list[Gait], field: str) -> int:
+        return len({getattr(r, field) for r in case})
+
+    by_alpha = groups(lambda r: (r.step_length, r.period))
+    by_period = groups(lambda r: (r.step_length, r.arm_amplitude))
     paths = []
-    for length, period in dict.fromkeys((r.step_length, r.period) for r in results):
-        case = [r for r in results if (r.step_length, r.period) == (length, period)]
-        name = f"W_vs_alpha_L{length:.3f}_T{period:.3f}.png"
-        title = f"W against alpha, L = {length:g} m, T = {period:g} s, params {case[0].params}"
-        paths.append(save(effort_figure(case, title=title), out_dir / name))
+    for (length, period), case in by_alpha.items():
+        if count(case, "arm_amplitude") > 1 or all(count(c, "period") < 2 for c in by_period.values()):
+            title = f"W against alpha, L = {length:g} m, T = {period:g} s, params {case[0].params}"
+            paths.append(save(effort_figure(case, title=title), out_dir / f"W_vs_alpha_L{length:.3f}_T{period:.3f}.png"))
+    for (length, alpha), case in by_period.items():
+        if count(case, "period") > 1:
+            deg = math.degrees(alpha)
+            title = f"W against T, L = {length:g} m, alpha = {deg:.4g} deg, params {case[0].params}"
+            paths.append(save(period_figure(case, title=title), out_dir / f"W_vs_T_L{length:.3f}_alpha{deg:.2f}.png"))
     return paths

@@ -36,6 +36,18 @@ PAPER_MOMENTUM = {
 }
 
 
+# The paper's jump: H(T+) about the new stance foot minus H(T-) about the old one, as it reports them.
+PAPER_JUMP = {mode: PAPER_MOMENTUM["T+ about the new stance foot"][mode] - PAPER_MOMENTUM["T- about the old stance foot"][mode]
+              for mode in ("normal", "anti-normal")}
+PAPER_JUMP_ROW = "jump, paper's definition: H(T+) new foot - H(T-) old foot"
+
+
+def paper_momentum_jump(gait: Gait) -> float:
+    """|H(T+) about the new stance foot - H(T-) about the old one| (kg m^2/s): the paper's jump,
+    which also counts the change of reference point between the two feet."""
+    return abs(gait.double_support.h_t_plus[1] - gait.double_support.h_t_minus[0])
+
+
 def momentum_jump(gait: Gait) -> float:
     """|H(T+) - H(T-)| about the vertical through the new stance foot (kg m^2/s): what the
     double support's impulses change in the yaw angular momentum, on one fixed axis."""
@@ -169,6 +181,9 @@ def _reference_table(references: dict[str, Reference]) -> list[str]:
             gaits = [ref.normal if mode == "normal" else ref.anti_normal for ref in references.values()]
             project = [_momenta(gait)[quantity] for gait in gaits]
             rows.append([quantity, mode, f"{value:.2f}"] + [f"{v:.3f}" for v in project])
+    for mode, value in PAPER_JUMP.items():
+        gaits = [ref.normal if mode == "normal" else ref.anti_normal for ref in references.values()]
+        rows.append([PAPER_JUMP_ROW, mode, f"{value:.2f}"] + [f"{paper_momentum_jump(g):.3f}" for g in gaits])
     return _table(header, rows)
 
 
@@ -264,12 +279,16 @@ def _momentum_at_paper_point(reference: Reference) -> str:
         f"{PAPER_MOMENTUM[q]['anti-normal']:g} against {moments['anti-normal'][q]:.2f}"
         for q in PAPER_MOMENTUM
     )
+    jumps = {"normal": paper_momentum_jump(reference.normal), "anti-normal": paper_momentum_jump(reference.anti_normal)}
     return (
         f"- **Angular momentum at L = T = 0.45, alpha = {PAPER_ALPHA_DEG} deg** (kg m^2/s, paper against project): "
         f"{pairs}. The anti-normal gait's momentum is larger in magnitude at both instants in the paper, and "
         + ("in the project too" if larger else "not at both in the project")
         + "; the magnitudes differ for the same reason as W (the boundary configurations). Signs are those of a "
-        "right stance foot (docs/model.md section 6)."
+        "right stance foot (docs/model.md section 6). With the paper's definition of the jump (H(T+) about the new "
+        f"stance foot minus H(T-) about the old one) the project gives {jumps['normal']:.2f} (normal) against the "
+        f"paper's {PAPER_JUMP['normal']:.2f}, and {jumps['anti-normal']:.2f} (anti-normal) against "
+        f"{PAPER_JUMP['anti-normal']:.2f}; the tables' jump is on one fixed axis (see the top of the page)."
     )
 
 
@@ -356,8 +375,9 @@ def render(
         "minimizer refines it), and the anti-normal gait is solved at the same alpha, as in the paper. "
         "W is in N m s, angular momentum in kg m^2/s, about the vertical through a foot: at T- (before the double "
         "support) about the old stance foot, at T+ (after it) about the new stance foot, as the paper reports them. "
-        "The **jump** is |H(T+) - H(T-)|, both about the new stance foot: what the double support changes on one "
-        "fixed axis. The stance foot of the computed step is the right one; the next step is its mirror image. "
+        "The **jump** in the tables is |H(T+) - H(T-)|, both about the new stance foot: what the double support "
+        "changes on one fixed axis. The paper's jump is H(T+) about the new stance foot minus H(T-) about the old "
+        "one, which also counts the change of reference point; it is compared at the paper's point below. The stance foot of the computed step is the right one; the next step is its mirror image. "
         "Paper: Aoustin and Formal'skii, numbers from docs/model.md section 7 (T = 0.45 s only).",
         "",
         "## Figures",

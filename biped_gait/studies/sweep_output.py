@@ -22,6 +22,15 @@ from .sweep import SweepGrid
 
 CSV_NAME = "sweep.csv"
 JSON_NAME = "sweep.json"
+OUTPUT_PATTERNS = (CSV_NAME, JSON_NAME, JSON_NAME + ".part", "W_vs_*.png")  # what a sweep writes
+
+
+def remove_previous(out_dir: Path) -> list[Path]:
+    """Delete the files an earlier sweep wrote in ``out_dir`` (nothing else); returns them."""
+    removed = sorted({p for pattern in OUTPUT_PATTERNS for p in Path(out_dir).glob(pattern) if p.is_file()})
+    for path in removed:
+        path.unlink()
+    return removed
 
 
 def csv_columns() -> list[str]:

@@ -1,0 +1,130 @@
+"""Faults of the recorder without a node: a full disk (a file object that refuses bytes while
+the disk is full, as ENOSPC does), a bag folder deleted while recording, an unwritable folder,
+and ``recover`` on a file that is not MCAP. Every failure is one ``RecordingError`` line and
+the file is finished as far as it got."""
+
+from __future__ import annotations
+
+import errno
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from biped_gait.recording.qos import qos_description
+from biped_gait.recording.reader import open_bag
+from biped_gait.recording.recover import is_complete, recover
+from biped_gait.recording.writer import RESERVE_NAME, McapRecorder, RecordingError
+
+from .test_recording import JOINTS, STRING, joint_state, string
+
+pytestmark = [pytest.mark.faults, pytest.mark.recording]
+
+STREAM = qos_description("keep_last", 50, "reliable", "volatile")
+LATCHED = qos_description("keep_last", 1, "reliable", "transient_local")
+ENTRY = shutil.which("biped-gait", path=str(Path(sys.executable).parent))
+
+
+class FullDisk:
+    """An opener whose files take ``room`` bytes, then refuse with ENOSPC (after a partial
+    write, as the kernel does) while the disk is full: until the recorder frees its reserve
+    (``frees_space``), or for ever."""
+
+    def __init__(self, room: int, frees_space: bool = True) -> None:
+        self.room, self.frees_space, self.refused = room, frees_space, 0
+
+    def __call__(self, path: Path):
+        disk, raw = self, open(path, "xb", buffering=0)
+        reserve = path.parent / RESERVE_NAME
+
+        class File:
+            def write(self, data) -> int:
+                full = disk.room <= 0 and not (disk.frees_space and not reserve.exists())
+                if full:
+                    disk.refused += 1
+                    raise OSError(errno.ENOSPC, "No space left on device")
+                count = raw.write(bytes(data[:max(disk.room, 1)] if disk.room > 0 else data))
+                disk.room -= count
+                return count
+
+            def fileno(self) -> int:
+                return raw.fileno()
+
+            def close(self) -> None:
+                raw.close()
+
+        return File()
+
+
+def record_until_it_fails(recorder: McapRecorder, limit: int = 5000) -> tuple[int, RecordingError | None]:
+    recorder.add_topic("/robot_description", STRING, [LATCHED])
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+    recorder.write("/robot_description", string("<robot/>"), 1)
+    for i in range(limit):
+        try:
+            recorder.write("/joint_states", joint_state(i), 10 + i)
+        except RecordingError as exc:
+            return i + 1, exc
+    return limit, None
+
+
+def test_a_full_disk_is_one_line_and_the_file_is_finished(tmp_path):
+    disk = FullDisk(room=20_000)
+    recorder = McapRecorder(tmp_path, "bag", chunk_size=2048, opener=disk)
+    written, error = record_until_it_fails(recorder)
+    assert error is not None and disk.refused == 1
+    message = str(error)
+    assert "\n" not in message and message.startswith("recording failed: ") and "No space left on device" in message
+    assert recorder.closed and not (recorder.bag_dir / RESERVE_NAME).exists()
+    recorder.write("/joint_states", joint_state(0), 1)  # after the failure: ignored, no second error
+    recorder.close()
+    assert is_complete(recorder.path)  # finished as far as it got: nothing handed over is lost
+    bag = open_bag(recorder.bag_dir)
+    assert bag.topics() == {"/robot_description": (STRING, 1), "/joint_states": (JOINTS, written)}
+    assert bag.offered_qos("/joint_states") == [STREAM] and bag.offered_qos("/robot_description") == [LATCHED]
+
+
+def test_a_disk_that_stays_full_leaves_a_recoverable_file(tmp_path):
+    recorder = McapRecorder(tmp_path, "bag", chunk_size=2048, opener=FullDisk(room=20_000, frees_space=False))
+    _, error = record_until_it_fails(recorder)
+    assert error is not None and "'biped-gait recover' rebuilds what it holds" in str(error)
+    assert not is_complete(recorder.path)
+    out = tmp_path / "recovered" / "recovered_0.mcap"
+    out.parent.mkdir()
+    assert recover(recorder.path, out) > 0 and is_complete(out)
+    info = yaml.safe_load((out.parent / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    assert all(t["topic_metadata"]["offered_qos_profiles"] for t in info["topics_with_message_count"])
+
+
+def test_a_deleted_bag_folder_is_one_line(tmp_path):
+    recorder = McapRecorder(tmp_path, "bag", chunk_size=1024)
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+    shutil.rmtree(recorder.bag_dir)
+    with pytest.raises(RecordingError, match="was deleted while recording"):
+        for i in range(1000):
+            recorder.write("/joint_states", joint_state(i), i)
+
+
+def test_a_bag_folder_deleted_before_close_is_one_line(tmp_path):
+    recorder = McapRecorder(tmp_path, "bag")
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+    recorder.write("/joint_states", joint_state(0), 1)
+    shutil.rmtree(recorder.bag_dir)
+    with pytest.raises(RecordingError, match="was deleted while recording"):
+        recorder.close()
+
+
+def test_an_unwritable_folder_is_one_line(tmp_path):
+    (tmp_path / "a_file").write_text("")
+    with pytest.raises(RecordingError, match=r"^recording failed: cannot create .*a_file/bags/bag: Not a directory$"):
+        McapRecorder(tmp_path / "a_file" / "bags", "bag")
+
+
+def test_recover_refuses_what_is_not_mcap(tmp_path):
+    (tmp_path / "notes.mcap").write_bytes(b"\x00\x01binary\xff" * 100)
+    done = subprocess.run([ENTRY, "recover", str(tmp_path / "notes.mcap")], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and done.stderr == f"biped-gait: error: {tmp_path / 'notes.mcap'}: not an MCAP file\n"
+    assert not (tmp_path.parent / "notes_recovered").exists()
