@@ -21,8 +21,8 @@ ATLAS_FORMAT = 2
 _CORE = Path(__file__).resolve().parent
 # The modules whose code decides a gait's solution and verdict.
 MODEL_CODE = ("model.py", "configurations.py", "rk8_tableau.py", "flow.py", "hybrid.py", "newton.py",
-              "bvp.py", "impulses.py", "reports.py", "admissibility.py", "stability.py", "settings.py",
-              "native/flow.cpp")
+              "bvp.py", "impulses.py", "samples.py", "reports.py", "admissibility.py", "stability.py",
+              "settings.py", "native/flow.cpp", "native/samples.cpp")
 
 
 def _strip_docstrings(tree: ast.AST) -> ast.AST:
