@@ -15,9 +15,9 @@ pytestmark = pytest.mark.core
 ENTRY = shutil.which("biped-gait", path=str(Path(sys.executable).parent))
 
 
-def run(*args: str) -> subprocess.CompletedProcess:
+def run(*args: str, timeout: float = 120.0) -> subprocess.CompletedProcess:
     assert ENTRY, "the biped-gait entry point is not installed in this environment"
-    return subprocess.run([ENTRY, *args], capture_output=True, text=True, timeout=120)
+    return subprocess.run([ENTRY, *args], capture_output=True, text=True, timeout=timeout)
 
 
 def test_plan_defaults_prints_a_converged_admissible_gait(tmp_path):

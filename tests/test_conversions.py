@@ -77,7 +77,7 @@ def test_requests_take_the_defaults_and_unknown_modes_are_refused():
     req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL)
     core = request_from_msg(req, "aoustin2013")
     assert core == GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013", "theta", "l1")
-    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1")
+    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1", None, math.inf, "joint")
     with pytest.raises(ValueError, match="unknown gait mode 7"):
         request_from_msg(PlanGait.Request(mode=7), "aoustin2013")
 

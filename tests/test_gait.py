@@ -39,7 +39,14 @@ def test_bvp_and_closure_residuals(default_gait):
     assert abs(default_gait.double_support.impulses.closure_residual) < 1e-9
 
 
-def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
+@pytest.fixture(scope="module")
+def paper_lp_gait(planner):
+    """The default gait with the paper's LP: no friction cone on the reaction impulses."""
+    return planner.plan(dataclasses.replace(DEFAULT_REQUEST, friction=math.inf))
+
+
+def test_impact_equations_hold_and_feet_are_at_rest(planner, paper_lp_gait):
+    default_gait = paper_lp_gait
     problem = impact_problem(planner, default_gait)
     a, b = problem.equations()
     sol = solve_impulses(problem, "l1")
@@ -56,8 +63,9 @@ def test_impact_equations_hold_and_feet_are_at_rest(planner, default_gait):
     assert sol.W == pytest.approx(default_gait.W, rel=1e-12)
 
 
-def test_lp_optimum_is_certified_two_ways(planner, default_gait):
+def test_lp_optimum_is_certified_two_ways(planner, paper_lp_gait):
     """The dual certificate from HiGHS, and the same LP solved by HiGHS's interior point."""
+    default_gait = paper_lp_gait
     assert default_gait.double_support.impulses.duality_gap < 1e-9
     problem = impact_problem(planner, default_gait)
     a, b = problem.equations()

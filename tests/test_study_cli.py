@@ -124,17 +124,22 @@ def test_figure_commands_write_png(tmp_path, name, options):
     assert proc.stdout.count("optimal arm amplitude alpha*") == (3 if name == "fig4" else 1)
 
 
+@pytest.mark.timeout(300)
 def test_results_page_is_generated_with_its_figures(tmp_path):
     page = tmp_path / "docs" / "results.md"
-    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--workers", "2")
+    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--workers", "2", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
     for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
                     "## The paper's claims, checked on these numbers",
-                    "## Where the project and the paper differ, and why"):
+                    "## Where the project and the paper differ, and why",
+                    "## Where walking is possible (maps beyond the paper)", "## Stability of the gaits (beyond the paper)",
+                    "## The physics a reviewer would check (beyond the paper)", "### Beside human walking"):
         assert heading in text
     links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
-    assert links == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
+    assert links[:3] == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
+    assert {"map-region-aoustin2013.png", "map-optimum-aoustin2013-table.png", "stability.png",
+            "rate-bound.png"} <= set(links)
     assert all((page.parent / link).read_bytes()[:8] == PNG_SIGNATURE for link in links)
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text

@@ -31,7 +31,7 @@ from ..core.configurations import GaitMode
 from ..core.params import BipedParams
 from ..core.planner import GaitRequest
 from .executors import planner_for
-from .optimize import NoAdmissibleGait, compare_modes
+from .optimize import COARSE_STEP, NoAdmissibleGait, compare_modes
 
 BOUNDARY_ALPHA = math.radians(25.0)  # rad: near the optima of the default set
 ADMISSIBLE = "admissible"
@@ -102,20 +102,20 @@ def boundary_period(params: BipedParams, mode: GaitMode, step_length: float, low
     return high
 
 
-def _optimum(params: BipedParams, step_length: float, period: float) -> Optimum | None:
-    """Worker entry: the optimum at (L, T) and the anti-normal gait there; None if no gait of
-    the range is admissible."""
+def _optimum(params: BipedParams, step_length: float, period: float, coarse_step: float) -> Optimum | None:
+    """Worker entry: the optimum at (L, T) and the anti-normal gait there (alpha bracketed every
+    ``coarse_step`` rad); None if no gait of the range is admissible."""
     try:
-        comparison = compare_modes(params, step_length, period)
+        comparison = compare_modes(params, step_length, period, coarse_step=coarse_step)
     except NoAdmissibleGait:
         return None
     normal, anti = comparison.normal, comparison.anti_normal
     return Optimum(step_length, period, normal.alpha, normal.W, anti.W if anti.usable else math.nan, normal.interior)
 
 
-def compute_maps(params: BipedParams, executor: Executor, stride: int = 2) -> WalkingMaps:
+def compute_maps(params: BipedParams, executor: Executor, stride: int = 2, coarse_step: float = COARSE_STEP) -> WalkingMaps:
     """The maps of ``params`` from its current normal-gait atlas; optima on every ``stride``-th
-    node of the admissible region, on ``executor``."""
+    node of the admissible region (alpha bracketed every ``coarse_step`` rad), on ``executor``."""
     atlas = Atlas.load(atlas_path(params, GaitMode.NORMAL), params)
     grid = atlas.grid
     cells = region(atlas)
@@ -126,7 +126,7 @@ def compute_maps(params: BipedParams, executor: Executor, stride: int = 2) -> Wa
             boundary_tasks[float(length)] = executor.submit(
                 boundary_period, params, GaitMode.NORMAL, float(length), float(grid.periods[row[0] - 1]),
                 float(grid.periods[row[0]]))
-    optimum_tasks = [executor.submit(_optimum, params, float(grid.step_lengths[i]), float(grid.periods[j]))
+    optimum_tasks = [executor.submit(_optimum, params, float(grid.step_lengths[i]), float(grid.periods[j]), coarse_step)
                      for i in range(0, len(grid.step_lengths), stride) for j in range(0, len(grid.periods), stride)
                      if cells[i, j] == 0]
     boundary = [(length, future.result()) for length, future in boundary_tasks.items()]

@@ -11,7 +11,7 @@ reported as such, not as an optimum.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -104,12 +104,14 @@ def optimal_arm_amplitude(
     alpha_range: tuple[float, float] = ALPHA_RANGE,
     coarse_step: float = COARSE_STEP,
     on_result: Callable[[Gait], None] | None = None,
+    options: Mapping[str, object] | None = None,
 ) -> ArmOptimum:
     """Minimize W over alpha in ``alpha_range`` (rad, the coarse sweep every ``coarse_step``
     rad and the upper end) for L (m), T (s), ``mode``, the sweep a continuation chain
     (``sweep.solve_chain``) from the gait the planner finds first. ``on_result`` sees every gait
     solved, coarse and refining, as it comes (progress reports; an exception it raises, such
-    as ``Canceled``, ends the search).
+    as ``Canceled``, ends the search). ``options``: further ``GaitRequest`` fields (friction,
+    rate_bound, effort_coordinates).
 
     Raises ``ValueError`` for an empty or inverted range, a step that is not positive, or an
     invalid gait request; ``NoAdmissibleGait`` if no coarse gait is admissible.
@@ -119,12 +121,12 @@ def optimal_arm_amplitude(
         bounds = f"[{math.degrees(low):g}, {math.degrees(high):g}] deg"
         raise ValueError(f"arm amplitude range is empty or inverted: {bounds}")
     for alpha in alpha_range:
-        validate_request(GaitRequest(step_length, period, alpha, mode), planner.params)
+        validate_request(GaitRequest(step_length, period, alpha, mode, **(options or {})), planner.params)
     alphas = inclusive_range(low, high, coarse_step, "arm amplitude")
     if alphas[-1] < high - 1e-12:
         alphas = (*alphas, high)
     mode_name = GaitMode.parse(mode).value
-    coarse = solve_chain(planner, step_length, period, mode_name, alphas, on_result)
+    coarse = solve_chain(planner, step_length, period, mode_name, alphas, on_result, options)
     solved = dict(zip(alphas, coarse))
     values = np.array([r.W if r.usable else np.nan for r in coarse])
     if np.all(np.isnan(values)):
@@ -139,7 +141,8 @@ def optimal_arm_amplitude(
         where = ADMISSIBILITY_EDGE
     else:
         where = INTERIOR
-        _refine(planner, step_length, period, mode_name, (alphas[best - 1], alphas[best + 1]), solved, on_result)
+        _refine(planner, step_length, period, mode_name, (alphas[best - 1], alphas[best + 1]), solved, on_result,
+                options)
     alpha = min((a for a, r in solved.items() if r.usable), key=lambda a: solved[a].W)
     return ArmOptimum(gait=solved[alpha], alpha_range=(low, high), where=where, evaluations=len(solved))
 
@@ -152,6 +155,7 @@ def _refine(
     bracket: tuple[float, float],
     solved: dict[float, Gait],
     on_result: Callable[[Gait], None] | None = None,
+    options: Mapping[str, object] | None = None,
 ) -> None:
     """Bounded scalar minimization of W over alpha inside ``bracket`` (rad), each solve
     warm-started from the nearest gait solved so far; every gait solved is added to ``solved``
@@ -159,7 +163,8 @@ def _refine(
 
     def effort(alpha: float) -> float:
         nearest = min(solved, key=lambda a: abs(a - alpha))
-        result = solve_near(planner, GaitRequest(step_length, period, alpha, mode), solved[nearest].warm_start())
+        request = GaitRequest(step_length, period, alpha, mode, **(options or {}))
+        result = solve_near(planner, request, solved[nearest].warm_start())
         solved[alpha] = result
         if on_result is not None:
             on_result(result)
@@ -182,11 +187,14 @@ def compare_modes(
     period: float,
     alpha_range: tuple[float, float] = ALPHA_RANGE,
     coarse_step: float = COARSE_STEP,
+    options: Mapping[str, object] | None = None,
 ) -> ModeComparison:
     """Worker entry: optimize the normal gait at L (m), T (s), then solve the anti-normal gait
-    at its alpha (the paper's comparison), with this worker's planner for ``params``."""
+    at its alpha (the paper's comparison), with this worker's planner for ``params``;
+    ``options``: further ``GaitRequest`` fields of every gait."""
     planner = planner_for(params)
-    normal = optimal_arm_amplitude(planner, step_length, period, GaitMode.NORMAL, alpha_range, coarse_step)
-    [anti] = solve_chain(planner, step_length, period, GaitMode.ANTI_NORMAL.value, (normal.alpha,))
+    normal = optimal_arm_amplitude(planner, step_length, period, GaitMode.NORMAL, alpha_range, coarse_step,
+                                   options=options)
+    [anti] = solve_chain(planner, step_length, period, GaitMode.ANTI_NORMAL.value, (normal.alpha,), options=options)
     return ModeComparison(normal, anti)
 

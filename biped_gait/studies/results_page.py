@@ -16,12 +16,18 @@ from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
-from .figures import save
-from .maps import WalkingMaps, compute_maps, optimum_figure, ratio_figure, reading, region_figure
-from ..core.planner import GaitPlanner, GaitRequest
-from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
-from ..core.params import DEFAULT_PARAMS, load_params
+from ..core.atlas import Atlas, atlas_path
+from ..core.configurations import GaitMode
 from ..core.gait import Gait
+from ..core.params import DEFAULT_PARAMS, load_params
+from ..core.planner import GaitPlanner, GaitRequest
+from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
+from .figures import save
+from .human_walking import human_comparison
+from .maps import WalkingMaps, compute_maps, optimum_figure, ratio_figure, reading, region_figure, stability_figure
+from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
+from .reviewer import ReviewerChecks, reviewer_lines
+from .stability_study import PointStability, point_stability, stability_lines
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
 
 PARAMETER_SETS = (DEFAULT_PARAMS, "aoustin2013-table")  # the default and the paper's table verbatim
@@ -356,14 +362,28 @@ def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> l
     return lines
 
 
+@dataclass(frozen=True)
+class Extensions:
+    """The page's sections beyond the paper: the maps per parameter set, the stability of the
+    paper's gaits, the reviewer's checks."""
+
+    maps: Sequence[WalkingMaps] = ()
+    stability: Sequence[PointStability] = ()
+    reviewer: ReviewerChecks | None = None
+
+
+STABILITY_FIGURE = "stability.png"
+RATE_FIGURE = "rate-bound.png"
+
+
 def render(
     studies: Sequence[Study], references: dict[str, Reference], figures: dict[str, str], coarse_step: float,
-    all_maps: Sequence[WalkingMaps] = (),
+    extensions: Extensions = Extensions(),
 ) -> str:
     """The whole page as Markdown. ``studies``: the default set's and the table set's (in
     that order); ``references`` by set name; ``figures`` maps a caption to a path relative to
-    the page; ``coarse_step`` (rad) is the study's alpha spacing; ``all_maps`` the maps of
-    where walking is possible, per set."""
+    the page; ``coarse_step`` (rad) is the study's alpha spacing; ``extensions`` the sections
+    beyond the paper."""
     default, table = studies
     lines = [
         "# Arm-swing study: results",
@@ -384,7 +404,7 @@ def render(
         "",
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-              if not path.startswith("map-")]
+              if not path.startswith("map-") and path not in (STABILITY_FIGURE, RATE_FIGURE)]
     for study in studies:
         label = " (default)" if study is default else ""
         lines += ["", f"## Parameter set `{study.params.name}`{label}", "", "Effort of the double support (N m s):",
@@ -399,7 +419,18 @@ def render(
     lines += _claims_section(studies)
     lines += ["", "## Where the project and the paper differ, and why", ""]
     lines += differences(default, table, references[default.params.name])
-    lines += _maps_section(all_maps, figures)
+    lines += _maps_section(extensions.maps, figures)
+    if extensions.stability:
+        lines += ["", "## Stability of the gaits (beyond the paper)", "",
+                  "Floquet multipliers of the Poincare map just after the double support (docs/model.md section 8): "
+                  "open loop, the plan's impulses held fixed; closed loop, what the simulator's walker does (impulses "
+                  "re-solved from the actual state, the next step re-aimed), by differences of its step. At the "
+                  "paper's three points, the normal gait at its optimal alpha and the anti-normal gait at the same "
+                  "alpha:", ""]
+        lines += stability_lines(extensions.stability, default.curves)
+        lines += ["", f"![Open-loop spectral radius over (L, T) and against alpha]({STABILITY_FIGURE})", ""]
+    if extensions.reviewer is not None:
+        lines += reviewer_lines(extensions.reviewer, RATE_FIGURE)
     return "\n".join(lines) + "\n"
 
 
@@ -418,11 +449,29 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     }
     for study in studies[1:]:
         figures[f"Fig. 4, parameter set {study.params.name}"] = (study.fig4(), f"fig4-{study.params.name}.png")
-    all_maps = [compute_maps(study.params, executor) for study in studies]
+    all_maps = [compute_maps(study.params, executor, coarse_step=coarse_step) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
+    extensions = _extensions(default, executor, all_maps, coarse_step)
+    figures["Open-loop spectral radius over (L, T) and against alpha"] = (
+        stability_figure(Atlas.load(atlas_path(default.params, GaitMode.NORMAL), default.params), default.curves),
+        STABILITY_FIGURE)
+    figures["Effort against the joint-rate bound"] = (
+        rate_bound_figure(extensions.reviewer.rate_curve, default.params.name), RATE_FIGURE)
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, all_maps))
+    out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, extensions))
     return [*paths, out]
 
+
+def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMaps], coarse_step: float) -> Extensions:
+    """The sections beyond the paper, for the default parameter set, computed on ``executor``
+    (optima bracketed every ``coarse_step`` rad)."""
+    params = default.params
+    points = [executor.submit(point_stability, params, *case, comparison.normal.alpha, mode)
+              for case, comparison in default.comparisons.items() if case in FIG4_CASES
+              for mode in (GaitMode.NORMAL, GaitMode.ANTI_NORMAL)]
+    readings = effort_readings(params, executor, coarse_step)
+    checks = ReviewerChecks(readings, rate_bound_curve(params, math.radians(PAPER_ALPHA_DEG)),
+                            human_comparison(params, coarse_step=coarse_step))
+    return Extensions(all_maps, [p.result() for p in points], checks)

@@ -12,7 +12,7 @@ continuation: ``GaitPlanner.plan``). Chains run on any ``concurrent.futures.Exec
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass
 
@@ -145,14 +145,17 @@ def solve_chain(
     mode: str,
     alphas: Sequence[float],
     on_result: Callable[[Gait], None] | None = None,
+    options: Mapping[str, object] | None = None,
 ) -> list[Gait]:
     """The gaits at L (m), T (s), mode over ascending ``alphas`` (rad), by continuation from the
     first, which the planner finds; each warm start extrapolated (secant) from the two gaits
     before it. ``on_result`` is called with each gait as it is solved (an exception it raises
-    stops the chain)."""
+    stops the chain); ``options`` are further fields of each ``GaitRequest`` (friction,
+    rate_bound, effort_coordinates)."""
     results: list[Gait] = []
     for k, alpha in enumerate(alphas):
-        result = solve_near(planner, GaitRequest(step_length, period, alpha, mode), predict(results, alphas[:k], alpha))
+        request = GaitRequest(step_length, period, alpha, mode, **(options or {}))
+        result = solve_near(planner, request, predict(results, alphas[:k], alpha))
         results.append(result)
         if on_result is not None:
             on_result(result)
