@@ -26,9 +26,8 @@ from biped_gait.core.atlas import Atlas, atlas_path
 from biped_gait.core.configurations import GaitMode
 from biped_gait.core.params import load_params, shipped_param_names
 from biped_gait.core.planner import GaitPlanner, GaitRequest
-from biped_gait.studies.executors import check_workers, open_executor
-from biped_gait.studies.study import fig4_grid
-from biped_gait.studies.sweep import solve_grid
+from biped_gait.studies.executors import check_workers
+from bench_study import time_study  # this folder's Fig. 4 timing
 
 
 def random_requests(count: int, seed: int = 7) -> list[GaitRequest]:
@@ -76,12 +75,7 @@ def main() -> None:
     yardstick = [timed(lambda: planner.plan(GaitRequest(0.45, 0.45, math.radians(a)), cold=True))[0]
                  for a in np.linspace(10.0, 34.0, 25)]
     workers = check_workers(args.workers)
-    grid = fig4_grid(load_params())
-    start = time.perf_counter()
-    with open_executor(workers) as executor:
-        results = [r for _, chain in solve_grid(grid, executor) for r in chain]
-    study = time.perf_counter() - start
-    assert len(results) == grid.size and all(r.admissible for r in results)
+    study, _, grid = time_study(workers)
     print(f"Fig. 4 study: {grid.size} gaits on {workers} worker processes: {study:.2f} s wall "
           f"(25 cold solves in this run: {sum(yardstick):.2f} s; ratio {study / sum(yardstick):.2f})")
 
