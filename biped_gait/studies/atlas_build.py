@@ -25,7 +25,7 @@ import numpy as np
 from ..core.admissibility import KNEE_TOLERANCE, Limit
 from ..core.atlas import Atlas, Grid, NodeStatus
 from ..core.configurations import GaitMode
-from ..core.continuation import continue_to
+from ..core.continuation import BRANCH_JUMP, continue_to
 from ..core.gait import Gait
 from ..core.params import BipedParams
 from ..core.planner import SEED, GaitPlanner, GaitRequest
@@ -98,8 +98,9 @@ def _solve_from(planner: GaitPlanner, grid: Grid, k: int, mode: GaitMode, source
     return result if result.converged else None
 
 
-def _stays(result: Gait, origin: Gait, bound: float = 2.0) -> bool:
-    return result.converged and float(np.max(np.abs(result.step.qd_a - origin.step.qd_a))) <= bound
+def _stays(result: Gait, origin: Gait) -> bool:
+    """Whether ``result`` is on ``origin``'s branch (qd(0) within the continuation's jump bound)."""
+    return result.converged and float(np.max(np.abs(result.step.qd_a - origin.step.qd_a))) <= BRANCH_JUMP
 
 
 def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: tuple[int, int], seed_guess) -> Slab:
