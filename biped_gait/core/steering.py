@@ -1,0 +1,194 @@
+"""Momentum steering: the walker's per-step re-aim that also returns the one quantity the
+impulses cannot set to the gait's value (docs/model.md section 8.7).
+
+The re-aim of docs/model.md section 8.5 gives the next step its duration as the tenth unknown.
+That leaves the angular momentum about the foot-to-foot line, which no impulse changes, to decay
+by itself: about 1 % per step at the default gait (closed-loop multiplier 0.99). After a push
+the walker walks on for hundreds of steps at another cadence before it is back on the orbit.
+
+Steering frees one more unknown, the trunk pitch theta' of the next touchdown configuration
+q_T(theta') = q_T + (theta' - theta_p) e_theta (e_theta = ``THETA_DIRECTION``: the pelvis and
+trunk pitch forward, the legs stay), and adds one equation, a feedback law. With, at touchdown k,
+
+    M_k      the momentum about the foot-to-foot line, z_d^T D_e(q^-) [0; qd^-] (kg m^2/s), which
+             the double support keeps into the next step,
+    theta_k  the pelvis pitch q2 + q3 + q4 of the touchdown configuration (rad),
+
+and the gait's M_p and theta_p, linearize the re-aim that aims at the plan's q_T (theta' =
+theta_p): M_{k+1} - M_p = s_k, with
+
+    s_k = a (theta_k - theta_p) + b (M_k - M_p),
+
+a = d M_{k+1} / d theta_k (kg m^2/s per rad), b = d M_{k+1} / d M_k (the slow multiplier, about
+0.99). s_k is the momentum error the plain re-aim would carry into the next touchdown. The law
+chooses theta' so that this error contracts by the factor ``rate`` (rho) per step:
+
+    a (theta' - theta_p) + b (M_{k+1} - M_p) = rho s_k           (M_{k+1} of the re-aimed step)
+
+Linearized, the closed loop then has the multipliers rho and 0 (and those of the re-aim's other,
+already dead-beat, modes): s_{k+1} = rho s_k, theta_{k+1} - theta_p = (rho - b) s_k / (a + b c),
+c = d M_{k+1} / d theta' the pitch's authority over the momentum. a + b c is 23.8 kg m^2/s per
+rad at the default gait; freeing the step length instead would give 0.4 kg m^2/s per m (a longer
+step gains in one step what the next step from the longer stance loses), which is why the pitch
+is the unknown freed. rho = 0 is dead-beat (two steps), larger rho spreads the correction and
+asks for smaller pitch changes.
+
+The eleven equations (the nine of the touchdown configuration, the current impact's closure,
+the law) in the eleven unknowns (next initial velocity v, duration tau, pitch theta') are solved
+by chord steps with the orbit's Jacobian (near the orbit: one or two steps), else by Newton's
+method with the exact Jacobian of the computed flow, first with theta' = theta_p (the plain
+re-aim, which reaches farther from the orbit), then with the law from there (from the orbit's
+values if the plain re-aim has no solution).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import newton
+from .configurations import THETA_DIRECTION
+from .flow import BallisticFlow
+from .hybrid import HybridStep, ImpactMap, exchange
+
+DEFAULT_RATE = 0.1
+"""rho: the momentum error's contraction per step (0: dead-beat); 0.25 reaches 1e-3 of the orbit
+within 10 steps from errors up to about 1e3 times that and asks about a quarter less pitch than
+dead-beat."""
+TOLERANCE = 1e-12  # rad, kg m^2/s: as the plain re-aim (docs/model.md section 8.5)
+CHORD_STEPS = 7
+NEWTON_ITERATIONS = 30
+FD_STEP = 1e-6  # rad: central differences of the impact map's configuration dependence
+
+
+class SteeringFailed(Exception):
+    """The steered re-aim has no solution near the state: the message says which stage failed."""
+
+
+def pelvis_pitch(q: np.ndarray) -> float:
+    """q2 + q3 + q4 (rad): the pelvis pitch, theta at a double-support configuration."""
+    return float(q[1] + q[2] + q[3])
+
+
+@dataclass(frozen=True)
+class SteeringReference:
+    """The gait the re-aim steers to, linearized on its orbit: touchdown configuration q_T
+    (rad), initial and final velocities (rad/s), duration (s), trunk pitch theta_p (rad),
+    momentum about the foot-to-foot line at its touchdown M_p (kg m^2/s), the gains a (kg m^2/s
+    per rad) and b (-) of s, and the chord Jacobian of the eleven equations on the orbit."""
+
+    q_t: np.ndarray
+    qd_a: np.ndarray
+    qd_b: np.ndarray
+    period: float
+    theta: float
+    momentum: float
+    a: float
+    b: float
+    jacobian: np.ndarray
+
+    def error(self, q_pre: np.ndarray, momentum: float) -> float:
+        """s (kg m^2/s) of a touchdown at ``q_pre`` with momentum ``momentum`` about the feet line."""
+        return self.a * (pelvis_pitch(q_pre) - self.theta) + self.b * (momentum - self.momentum)
+
+
+def momentum_row(hybrid: HybridStep, q: np.ndarray) -> np.ndarray:
+    """The joint part of z_d^T D_e at the double-support configuration ``q``: qd (rad/s) ->
+    momentum about the foot-to-foot line (kg m^2/s)."""
+    return hybrid.impact(q).momentum_row[3:]
+
+
+def _theta_derivative(f, q: np.ndarray) -> np.ndarray:
+    """d f(q + t e_theta) / d t at t = 0, by central differences (``FD_STEP``)."""
+    return (f(q + FD_STEP * THETA_DIRECTION) - f(q - FD_STEP * THETA_DIRECTION)) / (2 * FD_STEP)
+
+
+def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.ndarray, qd_a: np.ndarray,
+              qd_b: np.ndarray, period: float) -> SteeringReference:
+    """The linearization of the orbit from (``q0``, ``qd_a``) to (``q_t``, ``qd_b``) in
+    ``period`` (s) on ``flow``'s grid: one integration with its 18 x 18 sensitivity Phi.
+
+    a and b from the plain re-aim (unknowns dv, dtau; the start's pitch dtheta_s and momentum
+    dM_s given): Phi_qq e dtheta_s + Phi_qv dv + qd_b dtau = 0, (dg/dtheta_s qd_a) dtheta_s +
+    g dv - dM_s = 0, and dM' = r (Phi_vq e dtheta_s + Phi_vv dv + qdd_b dtau), with g the
+    closure's gain (d momentum after / d v) and r the momentum row at q_T."""
+    run = flow.propagate(q0, qd_a, period, np.eye(18))
+    phi = run.sens
+    qdd_b = flow.acceleration(q_t, qd_b)
+    gain = hybrid.impact(q_t).closure_gradients()[0]
+    gain_theta = _theta_derivative(lambda q: hybrid.impact(q).closure_gradients()[0], q_t) @ qd_a
+    row = momentum_row(hybrid, q_t)
+    plain = np.zeros((10, 10))
+    plain[:9, :9], plain[:9, 9], plain[9, :9] = phi[:9, 9:], qd_b, gain
+    forcing = np.zeros((10, 2))  # columns: dtheta_s, dM_s
+    forcing[:9, 0], forcing[9, 0], forcing[9, 1] = phi[:9, :9] @ THETA_DIRECTION, gain_theta, -1.0
+    response = -np.linalg.solve(plain, forcing)  # (dv, dtau) per (dtheta_s, dM_s)
+    d_qd = phi[9:, 9:] @ response[:9] + np.outer(qdd_b, response[9])  # d qd(tau) per (dtheta_s, dM_s)
+    d_qd[:, 0] += phi[9:, :9] @ THETA_DIRECTION
+    a, b = row @ d_qd
+    jacobian = np.zeros((11, 11))
+    jacobian[:10, :10] = plain
+    jacobian[:9, 10] = -THETA_DIRECTION
+    jacobian[10, :9], jacobian[10, 9] = b * row @ phi[9:, 9:], b * row @ qdd_b
+    jacobian[10, 10] = a + b * _theta_derivative(lambda q: momentum_row(hybrid, q), q_t) @ qd_b
+    return SteeringReference(q_t, qd_a, qd_b, period, pelvis_pitch(q_t), float(row @ qd_b), float(a), float(b),
+                             jacobian)
+
+
+class MomentumSteering:
+    """The steered re-aim towards ``ref`` with contraction ``rate`` (rho, in [0, 1)) on
+    ``flow``'s grid (the walker's)."""
+
+    def __init__(self, hybrid: HybridStep, flow: BallisticFlow, ref: SteeringReference, rate: float = DEFAULT_RATE):
+        if not 0.0 <= rate < 1.0:
+            raise ValueError(f"the momentum steering rate must be in [0, 1), got {rate}")
+        self.hybrid, self.flow, self.ref, self.rate = hybrid, flow, ref, rate
+
+    def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float) -> tuple[np.ndarray, float, float]:
+        """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
+        touchdown pitch theta' (rad), from the touchdown at ``q_pre`` (rad) whose impact map is
+        ``impact`` and pre-impact velocity ``xd_b`` (extended, rad/s); ``duration``: the warm
+        start of tau. ``SteeringFailed`` if no stage converges."""
+        ref = self.ref
+        momentum = float(impact.momentum_row @ xd_b)
+        law = self.rate * ref.error(q_pre, momentum)
+        gain = impact.closure_gradients()[0]
+        q_start = exchange(q_pre)
+        x0 = np.concatenate([ref.qd_a, [duration, ref.theta]])
+
+        def equations(x: np.ndarray, jacobian: bool, free_pitch: bool = True):
+            v, tau, theta = x[:9], x[9], (x[10] if free_pitch else ref.theta)
+            n = 11 if free_pitch else 10
+            if not tau > 0:
+                return np.full(n, np.nan), None, None
+            with np.errstate(over="ignore", invalid="ignore"):
+                run = self.flow.propagate(q_start, v, tau, np.vstack([np.zeros((9, 9)), np.eye(9)]) if jacobian else None)
+            target = ref.q_t + (theta - ref.theta) * THETA_DIRECTION
+            f = np.append(run.q - target, gain @ v - momentum)
+            row = momentum_row(self.hybrid, target) if free_pitch else None
+            if free_pitch:
+                f = np.append(f, ref.a * (theta - ref.theta) + ref.b * (row @ run.qd - ref.momentum) - law)
+            if not jacobian or not np.all(np.isfinite(f)):
+                return f, None, None
+            jac = np.zeros((n, n))
+            jac[:9, :9], jac[:9, 9], jac[9, :9] = run.sens[:9], run.qd, gain
+            if free_pitch:
+                qdd = self.flow.acceleration(run.q, run.qd)
+                jac[:9, 10] = -THETA_DIRECTION
+                jac[10, :9], jac[10, 9] = ref.b * row @ run.sens[9:], ref.b * row @ qdd
+                jac[10, 10] = ref.a + ref.b * _theta_derivative(lambda q: momentum_row(self.hybrid, q), target) @ run.qd
+            return f, jac, None
+
+        result = newton.chord(lambda x: equations(x, False)[::2], x0, ref.jacobian, TOLERANCE, CHORD_STEPS, contraction=0.5)
+        if not result.converged:
+            plain = newton.newton(lambda x, j: equations(np.append(x, ref.theta), j, False), x0[:10], TOLERANCE,
+                                  NEWTON_ITERATIONS)
+            start = np.append(plain.x, ref.theta) if plain.converged else x0
+            result = newton.newton(equations, start, TOLERANCE, NEWTON_ITERATIONS)
+            if not result.converged:
+                stage = "steering the momentum" if plain.converged else "re-aiming the next step"
+                raise SteeringFailed(f"{stage} failed ({result.message}): the state is too far from the plan")
+        if not result.x[9] > 0:
+            raise SteeringFailed("re-aiming the next step gave a duration <= 0: the state is too far from the plan")
+        return result.x[:9], float(result.x[9]), float(result.x[10])
