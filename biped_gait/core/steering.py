@@ -43,7 +43,7 @@ values if the plain re-aim has no solution).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -57,6 +57,7 @@ DEFAULT_RATE = 0.1
 within 10 steps from errors up to about 1e3 times that and asks about a quarter less pitch than
 dead-beat."""
 TOLERANCE = 1e-12  # rad, kg m^2/s: as the plain re-aim (docs/model.md section 8.5)
+COARSE_TOLERANCE = 1e-9  # where Newton on the coarse grid hands over to the walker's grid
 CHORD_STEPS = 7
 NEWTON_ITERATIONS = 30
 FD_STEP = 1e-6  # rad: central differences of the impact map's configuration dependence
@@ -138,57 +139,94 @@ def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.n
 
 class MomentumSteering:
     """The steered re-aim towards ``ref`` with contraction ``rate`` (rho, in [0, 1)) on
-    ``flow``'s grid (the walker's)."""
+    ``flow``'s grid (the walker's); Newton's iterations run on ``coarse`` (a coarser grid of the
+    same flow, or None for ``flow`` itself) and are finished on ``flow`` by chord steps."""
 
-    def __init__(self, hybrid: HybridStep, flow: BallisticFlow, ref: SteeringReference, rate: float = DEFAULT_RATE):
+    def __init__(self, hybrid: HybridStep, flow: BallisticFlow, ref: SteeringReference, rate: float = DEFAULT_RATE,
+                 coarse: BallisticFlow | None = None):
         if not 0.0 <= rate < 1.0:
             raise ValueError(f"the momentum steering rate must be in [0, 1), got {rate}")
         self.hybrid, self.flow, self.ref, self.rate = hybrid, flow, ref, rate
+        self.coarse = coarse or flow
 
     def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float) -> tuple[np.ndarray, float, float]:
         """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
         touchdown pitch theta' (rad), from the touchdown at ``q_pre`` (rad) whose impact map is
         ``impact`` and pre-impact velocity ``xd_b`` (extended, rad/s); ``duration``: the warm
-        start of tau. ``SteeringFailed`` if no stage converges."""
-        ref = self.ref
-        momentum = float(impact.momentum_row @ xd_b)
-        law = self.rate * ref.error(q_pre, momentum)
-        gain = impact.closure_gradients()[0]
-        q_start = exchange(q_pre)
-        x0 = np.concatenate([ref.qd_a, [duration, ref.theta]])
+        start of tau. ``SteeringFailed`` if no stage converges.
 
-        def equations(x: np.ndarray, jacobian: bool, free_pitch: bool = True):
-            v, tau, theta = x[:9], x[9], (x[10] if free_pitch else ref.theta)
-            n = 11 if free_pitch else 10
-            if not tau > 0:
-                return np.full(n, np.nan), None, None
-            with np.errstate(over="ignore", invalid="ignore"):
-                run = self.flow.propagate(q_start, v, tau, np.vstack([np.zeros((9, 9)), np.eye(9)]) if jacobian else None)
-            target = ref.q_t + (theta - ref.theta) * THETA_DIRECTION
-            f = np.append(run.q - target, gain @ v - momentum)
-            row = momentum_row(self.hybrid, target) if free_pitch else None
-            if free_pitch:
-                f = np.append(f, ref.a * (theta - ref.theta) + ref.b * (row @ run.qd - ref.momentum) - law)
-            if not jacobian or not np.all(np.isfinite(f)):
-                return f, None, None
-            jac = np.zeros((n, n))
-            jac[:9, :9], jac[:9, 9], jac[9, :9] = run.sens[:9], run.qd, gain
-            if free_pitch:
-                qdd = self.flow.acceleration(run.q, run.qd)
-                jac[:9, 10] = -THETA_DIRECTION
-                jac[10, :9], jac[10, 9] = ref.b * row @ run.sens[9:], ref.b * row @ qdd
-                jac[10, 10] = ref.a + ref.b * _theta_derivative(lambda q: momentum_row(self.hybrid, q), target) @ run.qd
-            return f, jac, None
-
-        result = newton.chord(lambda x: equations(x, False)[::2], x0, ref.jacobian, TOLERANCE, CHORD_STEPS, contraction=0.5)
+        Stages: chord steps on the walker's grid with the orbit's Jacobian; else Newton with the
+        law from the orbit's values; else Newton with theta' = theta_p (the plain re-aim), then
+        with the law from its solution. Newton runs on the coarse grid, finished by chord steps
+        (else Newton) on the walker's."""
+        equations = _Equations(self, q_pre, impact, xd_b)
+        x0 = np.concatenate([self.ref.qd_a, [duration, self.ref.theta]])
+        result = newton.chord(lambda x: equations(x, False)[::2], x0, self.ref.jacobian, TOLERANCE, CHORD_STEPS,
+                              contraction=0.1)
         if not result.converged:
-            plain = newton.newton(lambda x, j: equations(np.append(x, ref.theta), j, False), x0[:10], TOLERANCE,
-                                  NEWTON_ITERATIONS)
-            start = np.append(plain.x, ref.theta) if plain.converged else x0
-            result = newton.newton(equations, start, TOLERANCE, NEWTON_ITERATIONS)
+            result = equations.solve(x0, free_pitch=True)
+        if not result.converged:
+            plain = equations.solve(x0, free_pitch=False)
+            if not plain.converged:
+                raise SteeringFailed(f"re-aiming the next step failed ({plain.message}): the state is too far from the plan")
+            result = equations.solve(np.append(plain.x, self.ref.theta), free_pitch=True)
             if not result.converged:
-                stage = "steering the momentum" if plain.converged else "re-aiming the next step"
-                raise SteeringFailed(f"{stage} failed ({result.message}): the state is too far from the plan")
+                raise SteeringFailed(f"steering the momentum failed ({result.message}): the state is too far from the plan")
         if not result.x[9] > 0:
             raise SteeringFailed("re-aiming the next step gave a duration <= 0: the state is too far from the plan")
         return result.x[:9], float(result.x[9]), float(result.x[10])
+
+
+class _Equations:
+    """The steered re-aim's equations from one touchdown (``MomentumSteering.solve``)."""
+
+    def __init__(self, steering: MomentumSteering, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray) -> None:
+        self.steering, self.ref = steering, steering.ref
+        self.momentum = float(impact.momentum_row @ xd_b)
+        self.law = steering.rate * self.ref.error(q_pre, self.momentum)
+        self.gain = impact.closure_gradients()[0]
+        self.q_start = exchange(q_pre)
+
+    def __call__(self, x: np.ndarray, jacobian: bool, free_pitch: bool = True, flow: BallisticFlow | None = None):
+        """F (11, or 10 with theta' = theta_p), dF/dx when ``jacobian``, on ``flow`` (default the
+        walker's grid); ``x`` = (v, tau, theta') or (v, tau)."""
+        ref, hybrid = self.ref, self.steering.hybrid
+        flow = flow or self.steering.flow
+        v, tau, theta = x[:9], x[9], (x[10] if free_pitch else ref.theta)
+        n = 11 if free_pitch else 10
+        if not tau > 0:
+            return np.full(n, np.nan), None, None
+        with np.errstate(over="ignore", invalid="ignore"):
+            run = flow.propagate(self.q_start, v, tau, np.vstack([np.zeros((9, 9)), np.eye(9)]) if jacobian else None)
+        target = ref.q_t + (theta - ref.theta) * THETA_DIRECTION
+        f = np.append(run.q - target, self.gain @ v - self.momentum)
+        if free_pitch:
+            row = momentum_row(hybrid, target)
+            f = np.append(f, ref.a * (theta - ref.theta) + ref.b * (row @ run.qd - ref.momentum) - self.law)
+        if not jacobian or not np.all(np.isfinite(f)):
+            return f, None, None
+        jac = np.zeros((n, n))
+        jac[:9, :9], jac[:9, 9], jac[9, :9] = run.sens[:9], run.qd, self.gain
+        if free_pitch:
+            qdd = flow.acceleration(run.q, run.qd)
+            jac[:9, 10] = -THETA_DIRECTION
+            jac[10, :9], jac[10, 9] = ref.b * row @ run.sens[9:], ref.b * row @ qdd
+            jac[10, 10] = ref.a + ref.b * _theta_derivative(lambda q: momentum_row(hybrid, q), target) @ run.qd
+        return f, jac, None
+
+    def solve(self, x0: np.ndarray, free_pitch: bool) -> newton.SolveResult:
+        """Newton from ``x0`` on the coarse grid, finished by chord steps on the walker's grid
+        with the last coarse Jacobian, else by Newton there. The result's x always has theta'."""
+        n = 11 if free_pitch else 10
+        coarse, fine = self.steering.coarse, self.steering.flow
+
+        def on(flow: BallisticFlow):
+            return lambda x, jacobian: self(x, jacobian, free_pitch, flow)
+
+        tol = TOLERANCE if coarse is fine else COARSE_TOLERANCE
+        result = newton.newton(on(coarse), x0[:n], tol, NEWTON_ITERATIONS)
+        if result.converged and coarse is not fine:
+            finish = newton.chord(lambda x: on(fine)(x, False)[::2], result.x, result.jacobian, TOLERANCE,
+                                  CHORD_STEPS, contraction=0.1)
+            result = finish if finish.converged else newton.newton(on(fine), result.x, TOLERANCE, NEWTON_ITERATIONS)
+        return result if free_pitch else replace(result, x=np.append(result.x, self.ref.theta))

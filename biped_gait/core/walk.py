@@ -26,7 +26,7 @@ which physical foot that is, and ``stance_foot`` where it is in the world (m). U
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -204,7 +204,8 @@ class Walker:
         self.steering = None
         if self.momentum_rate is not None:
             ref = reference(self.hybrid, self.step_flow, np.asarray(orbit.q0), self.q_t, self.qd_a, self.qd_b, self.period)
-            self.steering = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate)
+            coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
+            self.steering = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse)
         elif self.reaim:
             # d q(T) / d qd(0) on the planned orbit: the chord Jacobian of every re-aim.
             seeds = np.vstack([np.zeros((9, 9)), np.eye(9)])
@@ -403,18 +404,23 @@ class Walk:
     """A plan in, an iterator of samples and events out.
 
     Iterating yields, in time order: ``Sample`` (every 1 / ``rate`` s of simulated time, with
-    the robot in world terms), ``Touchdown`` at the end of each step, and at the end one of
-    ``Finished`` (``steps`` steps made; 0 means never), ``Fell``, or ``CouldNotStart`` (then
-    nothing else). ``model`` and ``world`` (None if it could not start) describe the robot.
+    the robot in world terms), ``AppliedPush`` where a push acted, ``Touchdown`` at the end of
+    each step, and at the end one of ``Finished`` (``steps`` steps made; 0 means never),
+    ``Fell``, or ``CouldNotStart`` (then nothing else). ``model`` and ``world`` (None if it
+    could not start) describe the robot. ``momentum_rate``: the walker's momentum steering
+    (``Walker``); ``before_step``: called with the walker before each step (pushes to apply, a
+    gait to aim at: ``Walker.push``, ``Walker.retarget``).
     """
 
     def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,
-                 settings: Settings = DEFAULTS) -> None:
+                 settings: Settings = DEFAULTS, momentum_rate: float | None = None,
+                 before_step: Callable[[Walker], object] | None = None) -> None:
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if steps < 0:
             raise ValueError(f"steps must be 0 (no end) or positive, got {steps}")
         self.orbit, self.rate, self.steps = orbit, rate, steps
+        self.before_step = before_step
         self.problem = ""
         self.model: BipedModel | None = None
         self.world: WorldView | None = None
@@ -431,21 +437,27 @@ class Walk:
             self.problem = str(exc)
             return
         self.world = WorldView(self.model)
-        self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings)
+        self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings, momentum_rate)
 
-    def __iter__(self) -> Iterator[Sample | Touchdown | Fell | Finished | CouldNotStart]:
+    def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
         if self.walker is None:
             yield CouldNotStart(self.problem)
             return
         walker, world = self.walker, self.world
         while self.steps == 0 or walker.state.step < self.steps:
+            if self.before_step is not None:
+                self.before_step(walker)
             s = walker.state
             outcome = walker.walk_step()
+            pushes = list(outcome.pushes)
             if outcome.samples:
                 pictures = world.pictures(np.array([x.q for x in outcome.samples]),
                                           np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
                 for k, sample in enumerate(outcome.samples):
+                    while pushes and pushes[0].t <= sample.t:
+                        yield pushes.pop(0)
                     yield replace(sample, world=pictures.state(k))
+            yield from pushes
             if outcome.touchdown is None:
                 t = outcome.samples[-1].t if outcome.samples else s.t
                 yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)
