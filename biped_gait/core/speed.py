@@ -80,8 +80,11 @@ class SpeedRule:
 
 
 def _alpha_slices(atlas: Atlas, alpha: float) -> list[tuple[int, float]]:
-    """The atlas's alpha slices around ``alpha`` (rad) with their linear weights (nonzero only)."""
+    """The atlas's alpha slices around ``alpha`` (rad) with their linear weights (nonzero only;
+    an atlas of one alpha has that slice only)."""
     alphas = atlas.grid.alphas
+    if len(alphas) == 1:
+        return [(0, 1.0)]
     k = int(np.clip(np.searchsorted(alphas, alpha, side="right") - 1, 0, len(alphas) - 2))
     t = float(np.clip((alpha - alphas[k]) / (alphas[k + 1] - alphas[k]), 0.0, 1.0))
     return [(i, w) for i, w in ((k, 1.0 - t), (k + 1, t)) if w > 0.0]
