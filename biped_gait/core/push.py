@@ -58,10 +58,12 @@ class Push:
 
 @dataclass(frozen=True)
 class AppliedPush:
-    """A push as it acted: in ``step`` at ``t`` (s in the walk), ``time_in_step`` (s), the
-    impulse (N s, world axes) and the velocity jump it gave (rad/s, model coordinates)."""
+    """A push as it acted: in ``step`` (on the ``stance_side`` foot) at ``t`` (s in the walk),
+    ``time_in_step`` (s), the impulse (N s, world axes) and the velocity jump it gave (rad/s,
+    model coordinates)."""
 
     step: int
+    stance_side: str
     t: float
     time_in_step: float
     impulse: np.ndarray

@@ -26,15 +26,16 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .atlas import Atlas
+from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import solve_bvp
 from .planner import BRANCH_BOUND
 from .settings import Settings
-from .speed import SpeedRule
+from .speed import FixedCadence, LeastEffort, SpeedRule, walkable_nodes
 from .steering import pelvis_pitch
 from .walk import PlannedOrbit, Walker
 
 MAX_CHANGE = 0.05  # m/s per step: the default bound on the aimed gait's change of speed
+SPEED_RULES = ("least_effort", "cadence")
 
 
 @dataclass(frozen=True)
@@ -139,3 +140,35 @@ class SpeedFollower:
             return replace(current, step_length=step_length, period=period, q0=step.q0, q_t=step.q_target,
                            qd_a=step.qd_a, qd_b=step.qd_b), ""
         return None, f"the gait L = {step_length:.3f} m, T = {period:.3f} s: {message}"
+
+
+def follower_for(walker: Walker, settings: Settings, rule: str = SPEED_RULES[0], max_change: float = MAX_CHANGE,
+                 source: str | None = None) -> tuple[SpeedFollower, str]:
+    """A follower of speed commands for ``walker``'s gait (its parameters, alpha and mode), and a
+    note ('' if none): ``rule`` ``least_effort`` needs the current gait atlas of the walker's
+    parameters (``source``: the name or file the user gave them by), and falls back to
+    ``cadence`` (the walker's period) with a note saying why; ``cadence`` uses the atlas's
+    walkable step lengths when there is one."""
+    if rule not in SPEED_RULES:
+        raise ValueError(f"unknown speed rule {rule!r}: use {' or '.join(SPEED_RULES)}")
+    orbit, params = walker.orbit, walker.bm.params
+    notes = []
+    try:
+        atlas = Atlas.load(atlas_path(params, orbit.mode), params, source)
+    except AtlasError as exc:
+        atlas = None
+        notes.append(str(exc))
+    walkable = walkable_nodes(atlas, orbit.arm_amplitude, walker.hybrid, walker.grid) if atlas is not None else None
+    if rule == "least_effort" and atlas is not None:
+        try:
+            return SpeedFollower(LeastEffort(atlas, orbit.arm_amplitude, walkable), orbit, settings, atlas, max_change), ""
+        except ValueError as exc:
+            notes.append(str(exc))
+    try:
+        cadence = FixedCadence(orbit.period, atlas, walkable)
+    except ValueError as exc:
+        cadence = FixedCadence(orbit.period)
+        notes.append(str(exc))
+    if rule == "least_effort":
+        notes.append(f"walking at a fixed cadence (T = {orbit.period:g} s) instead of the least effort per metre")
+    return SpeedFollower(cadence, orbit, settings, atlas, max_change), "; ".join(notes)

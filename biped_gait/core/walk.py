@@ -242,7 +242,7 @@ class Walker:
         while self._pushes and self._pushes[0].time_in_step <= due + 1e-12:
             push = self._pushes.pop(0)
             jump = self.trunk_push.velocity_jump(q, push.impulse, s.stance_side)
-            self._applied.append(AppliedPush(s.step, s.t + t_step, t_step, push.impulse, jump))
+            self._applied.append(AppliedPush(s.step, s.stance_side, s.t + t_step, t_step, push.impulse, jump))
             qd = qd + jump
         return qd
 
