@@ -1,7 +1,8 @@
 """``docs/results.md``: the arm-swing study against the paper's numbers (docs/model.md section 7) for
 the default parameter set and the paper's table verbatim, with its figures, the paper's
 claims checked on the computed numbers, and where the project and the paper differ,
-written from the computed evidence.
+written from the computed evidence; then the maps of where walking is possible and the walk
+beyond the paper (stability, pushes, commanded speed: ``walking_page``).
 
 Everything on the page is computed when it is generated (``biped-gait results-page``); only
 the paper's own numbers are constants here. W in N m s, angular momentum in kg m^2/s,
@@ -23,6 +24,7 @@ from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from ..core.params import DEFAULT_PARAMS, load_params
 from ..core.gait import Gait
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
+from .walking_page import Walking, compute_walking, walking_figures, walking_section
 
 PARAMETER_SETS = (DEFAULT_PARAMS, "aoustin2013-table")  # the default and the paper's table verbatim
 LONG_PERIOD_CASE = max(TABLE_CASES, key=lambda case: case[1])  # (L m, T s)
@@ -358,12 +360,13 @@ def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> l
 
 def render(
     studies: Sequence[Study], references: dict[str, Reference], figures: dict[str, str], coarse_step: float,
-    all_maps: Sequence[WalkingMaps] = (),
+    all_maps: Sequence[WalkingMaps] = (), walking: Walking | None = None,
 ) -> str:
     """The whole page as Markdown. ``studies``: the default set's and the table set's (in
     that order); ``references`` by set name; ``figures`` maps a caption to a path relative to
     the page; ``coarse_step`` (rad) is the study's alpha spacing; ``all_maps`` the maps of
-    where walking is possible, per set."""
+    where walking is possible, per set; ``walking`` the default set's walk (stability, pushes,
+    commanded speed), its figures' paths starting with ``walk-``."""
     default, table = studies
     lines = [
         "# Arm-swing study: results",
@@ -384,7 +387,7 @@ def render(
         "",
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-              if not path.startswith("map-")]
+              if not path.startswith(("map-", "walk-"))]
     for study in studies:
         label = " (default)" if study is default else ""
         lines += ["", f"## Parameter set `{study.params.name}`{label}", "", "Effort of the double support (N m s):",
@@ -400,6 +403,8 @@ def render(
     lines += ["", "## Where the project and the paper differ, and why", ""]
     lines += differences(default, table, references[default.params.name])
     lines += _maps_section(all_maps, figures)
+    if walking is not None:
+        lines += walking_section(walking, {c: path for c, path in figures.items() if path.startswith("walk-")})
     return "\n".join(lines) + "\n"
 
 
@@ -421,8 +426,11 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     all_maps = [compute_maps(study.params, executor) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
+    walking = compute_walking(executor, default)
+    figures.update(walking_figures(walking, default.params.name))
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, all_maps))
+    out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, all_maps,
+                          walking))
     return [*paths, out]
 
