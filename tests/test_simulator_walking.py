@@ -25,7 +25,7 @@ from biped_gait_interfaces.msg import GaitEvent, GaitPhase
 from biped_gait_interfaces.srv import Push
 
 from .conftest import DEFAULT_REQUEST
-from .ros_helpers import read_bag, start_node, stop_node
+from .ros_helpers import read_bag, planner_process, start_simulator, stop_node
 
 pytestmark = pytest.mark.ros
 
@@ -35,10 +35,8 @@ SIMULATOR = "biped_gait_simulator"
 
 @pytest.fixture(scope="module")
 def planner_node(tmp_path_factory):
-    where = tmp_path_factory.mktemp("walking_planner")
-    proc = start_node("biped-gait-planner", "-r", f"__node:={PLANNER}", "-p", "record:=false", cwd=where)
-    yield proc
-    assert stop_node(proc) == 0
+    with planner_process(PLANNER, tmp_path_factory.mktemp("walking_planner")) as proc:
+        yield proc
 
 
 @pytest.fixture(scope="module")
@@ -52,10 +50,7 @@ def forward_limit(planner) -> float:
 
 
 def simulator(where: Path, *params: str):
-    args = ["-p", f"plan_service:=/{PLANNER}/plan_gait", "-p", f"record_dir:={where / 'bags'}"]
-    for p in params:
-        args += ["-p", p]
-    return start_node("biped-gait-simulator", *args, cwd=where)
+    return start_simulator(where, PLANNER, *params)
 
 
 def test_a_push_below_the_limit_is_recovered(planner_node, forward_limit, tmp_path):

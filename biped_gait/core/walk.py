@@ -18,7 +18,13 @@ planned touchdown configuration, with the next step's DURATION as the free tenth
 one quantity the impulses cannot set, that momentum, is regulated by how long gravity acts on
 it), under the current impact's momentum closure, so that the target is exactly reachable and
 the next touchdown lands on the plan. It reports |s| for the plan's own velocity as the miss,
-and how far the re-aimed velocity is from the plan's.
+and how far the re-aimed velocity is from the plan's. That momentum is left to decay by
+itself (1 % per step); with ``momentum_rate`` the re-aim also steers it back to the plan's
+(``steering``: the next touchdown's trunk pitch freed).
+
+Between steps the walker can be given a push on the trunk at a time in the next step
+(``push``, core/push.py: the step is split there) and another gait to aim at (``retarget``: the
+next step is a transition step, core/transitions.py).
 
 Everything is in the model's coordinates (stance leg 1 on the right); ``stance_side`` says
 which physical foot that is, and ``stance_foot`` where it is in the world (m). Units SI, rad.
