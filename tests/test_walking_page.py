@@ -56,7 +56,7 @@ def test_the_walking_section_and_its_figures(default_gait, planner, tmp_path):
     by_rate = {lp.steering: lp.radius for lp in loops if lp.step_length == 0.45}
     assert 0.98 < by_rate[None] < 1.0 and by_rate[DEFAULT_RATE] == pytest.approx(DEFAULT_RATE, abs=5e-3)
     with ThreadPoolExecutor(2) as executor:
-        pushes = run_push_study(executor, params, 0.45, 0.45, "normal", [(0.0, "left"), (alpha, "left")])
+        pushes = run_push_study(executor, params, 0.45, 0.45, "normal", [(0.0, "left"), (alpha, "left"), (alpha, "right")])
         plain = run_push_study(executor, params, 0.45, 0.45, "normal", [(alpha, "left")], steering=None)
     assert plain[0].limit < pushes[1].limit
     ramp, rule, note = speed_ramp(params, alpha, (0.9, 1.0), hold=3)
@@ -69,6 +69,6 @@ def test_the_walking_section_and_its_figures(default_gait, planner, tmp_path):
     assert all((tmp_path / name).stat().st_size > 10_000 for name in paths.values())
     text = "\n".join(walking_section(walking, paths))
     assert "## The walk: stability, pushes, commanded speed" in text
-    assert f"| left | {pushes[0].limit:.3f} | {pushes[1].limit:.3f} | {plain[0].limit:.3f} |" in text
+    assert f"| left | {pushes[0].limit:.3g} | {pushes[1].limit:.3g} | {plain[0].limit:.3g} |" in text
     assert all(f"]({name})" in text for name in paths.values())
     assert np.isfinite([s.W for s in ramp]).all() and len(ramp) >= 9

@@ -231,7 +231,7 @@ def _push_table(walking: Walking) -> list[str]:
         for limits, alpha in ((walking.pushes, 0.0), (walking.pushes, walking.alpha_opt), (walking.plain_pushes,
                                                                                             walking.alpha_opt)):
             found = [p for p in limits if p.direction == direction and p.alpha == alpha]
-            values.append(f"{found[0].limit:.3f}" if found else "-")
+            values.append(f"{found[0].limit:.3g}" if found else "-")
         rows.append(f"| {direction} | " + " | ".join(values) + " |")
     return [f"| direction | alpha = 0 | alpha* = {math.degrees(walking.alpha_opt):.2f} deg | alpha*, plain re-aim |",
             "|---|---|---|---|", *rows]
@@ -263,11 +263,17 @@ def walking_section(walking: Walking, figures: dict[str, str]) -> list[str]:
              "magnitudes need not form an interval (the re-aim's boundary-value problem has folds), so each figure "
              "is the largest below which every push tried was recovered (N s):", ""]
     lines += _push_table(walking)
+    at_opt = {p.direction: p.limit for p in walking.pushes if p.alpha == walking.alpha_opt}
+    side = ("to the left, towards the swing foot's side, than to the right, over the stance foot"
+            if at_opt["left"] > at_opt["right"] else "to the right, over the stance foot, than to the left")
     lines += ["", "The pushes are small: the single support is ballistic, so a push acts uncorrected until the next "
               "touchdown, amplified by the open-loop instability over half a step; the re-aim and the impulses can "
               "then only correct what reaches the double support (pushes fail by a re-aim without solution or a "
-              "double support whose impulse LP is infeasible). A push to the left, towards the swing foot's side, "
-              "is taken far better than one to the right, over the stance foot.", "",
+              f"double support whose impulse LP is infeasible). The walker takes larger pushes {side} "
+              f"({at_opt['left']:.3g} against {at_opt['right']:.3g} N s at alpha*). Failures of the first push not "
+              "recovered, per direction at alpha*: "
+              + "; ".join(f"{p.direction} {p.first_failure:.3g} N s, {p.failure}" for p in walking.pushes
+                          if p.alpha == walking.alpha_opt and p.direction in AXIS_DIRECTIONS) + ".", "",
               f"- **Commanded speed** ({walking.rule}"
               + (f"; {walking.note}" if walking.note else "") + f"): a ramp of /cmd_vel from {RAMP_SPEEDS[0]:g} to "
               f"{RAMP_SPEEDS[1]:g} m/s and back, one transition step per change of the aimed gait "
