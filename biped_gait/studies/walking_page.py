@@ -39,6 +39,7 @@ AXIS_DIRECTIONS = ("forward", "backward", "left", "right")
 DIAGONALS = ("forward-left", "backward-left", "backward-right", "forward-right")
 RAMP_SPEEDS = (0.6, 1.2)  # m/s: from, to and back
 RAMP_HOLD = 8  # steps at each end of the ramp
+RAMP_RATE = 0.03  # m/s per step: the command's ramp (the follower allows 0.05)
 
 
 @dataclass(frozen=True)
@@ -102,17 +103,19 @@ def speed_ramp(params: BipedParams, alpha: float, speeds: tuple[float, float] = 
                hold: int = RAMP_HOLD) -> tuple[list[RampStep], str, str]:
     """Walk a ramp of commanded speeds with the simulator's walker and speed follower, from the
     gait L = T = 0.45 s at ``alpha`` (rad): the first speed until the follower is there and
-    ``hold`` steps more, the second likewise, and the first again; returns the steps from the
-    first speed's hold on, the rule's description and the follower's note ('' if none)."""
+    ``hold`` steps more, a ramp of ``RAMP_RATE`` per step to the second, ``hold`` steps there,
+    and back likewise; returns the steps from the first hold on, the rule's description and the
+    follower's note ('' if none)."""
     planner = planner_for(params)
     gait = planner.plan(GaitRequest(0.45, 0.45, alpha, GaitMode.NORMAL))
     walker = Walker(planner.hybrid, PlannedOrbit.of(gait), rate=50.0, momentum_rate=DEFAULT_RATE)
     follower, note = follower_for(walker, DEFAULTS)
-    changes = math.ceil(max(abs(speeds[1] - speeds[0]), abs(follower.speed - speeds[0])) / follower.max_change)
-    schedule = [speeds[0]] * (changes + hold) + [speeds[1]] * (changes + hold) + [speeds[0]] * (changes + hold)
+    settle = math.ceil(abs(follower.speed - speeds[0]) / follower.max_change)
+    ramp = list(np.linspace(*speeds, math.ceil(abs(speeds[1] - speeds[0]) / RAMP_RATE) + 1))
+    schedule = [speeds[0]] * (settle + hold) + ramp + [speeds[1]] * hold + ramp[::-1] + [speeds[0]] * hold
     steps = []
     for command in schedule:
-        follower.command(command)
+        follower.command(float(command))
         start = time.process_time()
         transition = follower.before_step(walker)
         foot = walker.state.stance_foot[0]
@@ -121,9 +124,9 @@ def speed_ramp(params: BipedParams, alpha: float, speeds: tuple[float, float] = 
             raise RuntimeError(f"the speed ramp fell in step {walker.state.step}: {outcome.fall}")
         cpu = time.process_time() - start if transition is not None else 0.0
         td = outcome.touchdown
-        steps.append(RampStep(command, follower.speed, (walker.state.stance_foot[0] - foot) / td.t_step,
+        steps.append(RampStep(float(command), follower.speed, (walker.state.stance_foot[0] - foot) / td.t_step,
                               follower.orbit.step_length, follower.orbit.period, td.W, cpu))
-    return steps[changes:], follower.rule.describe(), note
+    return steps[settle:], follower.rule.describe(), note
 
 
 def compute_walking(executor: Executor, study: Study) -> Walking:
@@ -145,8 +148,8 @@ def compute_walking(executor: Executor, study: Study) -> Walking:
 
 # Figures -------------------------------------------------------------------------------------
 
-def _figure(rows: int = 1, columns: int = 2) -> tuple[Figure, np.ndarray]:
-    fig = Figure(figsize=(5.2 * columns, 3.6 * rows + 0.6), layout="constrained")
+def _figure(rows: int = 1, columns: int = 2, width: float = 5.2) -> tuple[Figure, np.ndarray]:
+    fig = Figure(figsize=(width * columns, 3.6 * rows + 0.6), layout="constrained")
     FigureCanvasAgg(fig)
     return fig, np.array([[fig.add_subplot(rows, columns, r * columns + c + 1) for c in range(columns)]
                           for r in range(rows)])
@@ -184,7 +187,7 @@ def multipliers_figure(walking: Walking) -> Figure:
 def ramp_figure(walking: Walking) -> Figure:
     """The speed ramp: commanded, aimed and measured speed per step (top), W per step and per
     metre (bottom)."""
-    fig, axes = _figure(2, 1)
+    fig, axes = _figure(2, 1, width=9.0)
     top, bottom = axes[0, 0], axes[1, 0]
     steps = np.arange(len(walking.ramp))
     top.plot(steps, [s.commanded for s in walking.ramp], "k--", label="commanded (/cmd_vel)")
@@ -199,7 +202,7 @@ def ramp_figure(walking: Walking) -> Figure:
     bottom.set_ylabel("W per step (N m s)", color="C2")
     twin.set_ylabel("W per metre walked (N s)", color="C3")
     top.set_title(f"Speed ramp {RAMP_SPEEDS[0]:g} -> {RAMP_SPEEDS[1]:g} -> {RAMP_SPEEDS[0]:g} m/s, alpha = "
-                  f"{math.degrees(walking.alpha_opt):.2f} deg ({walking.rule})", fontsize="medium")
+                  f"{math.degrees(walking.alpha_opt):.2f} deg, {walking.rule.split(':')[0]}", fontsize="medium")
     for ax in (top, bottom):
         ax.grid(True, alpha=0.3)
     return fig
@@ -276,8 +279,8 @@ def walking_section(walking: Walking, figures: dict[str, str]) -> list[str]:
                           if p.alpha == walking.alpha_opt and p.direction in AXIS_DIRECTIONS) + ".", "",
               f"- **Commanded speed** ({walking.rule}"
               + (f"; {walking.note}" if walking.note else "") + f"): a ramp of /cmd_vel from {RAMP_SPEEDS[0]:g} to "
-              f"{RAMP_SPEEDS[1]:g} m/s and back, one transition step per change of the aimed gait "
-              f"(at most {0.05:g} m/s per step). The fastest gait aimed at: L = {top.step_length:.3f} m, "
+              f"{RAMP_SPEEDS[1]:g} m/s and back, {RAMP_RATE:g} m/s per step, one transition step per change of "
+              f"the aimed gait. The fastest gait aimed at: L = {top.step_length:.3f} m, "
               f"T = {top.period:.3f} s; back at {RAMP_SPEEDS[0]:g} m/s the walk measures {low.measured:.4f} m/s. "
               f"{len(transitions)} transition steps, CPU time each (the new gait's orbit, the re-aim, impulses and "
               f"integration) median {1e3 * np.median(transitions):.1f} ms, max {1e3 * max(transitions):.1f} ms.", ""]
