@@ -110,30 +110,33 @@ def _theta_derivative(f, q: np.ndarray) -> np.ndarray:
 def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.ndarray, qd_a: np.ndarray,
               qd_b: np.ndarray, period: float) -> SteeringReference:
     """The linearization of the orbit from (``q0``, ``qd_a``) to (``q_t``, ``qd_b``) in
-    ``period`` (s) on ``flow``'s grid: one integration with its 18 x 18 sensitivity Phi.
+    ``period`` (s) on ``flow``'s grid: one integration with its sensitivity Phi to the initial
+    velocity and to the initial configuration along e_theta.
 
     a and b from the plain re-aim (unknowns dv, dtau; the start's pitch dtheta_s and momentum
     dM_s given): Phi_qq e dtheta_s + Phi_qv dv + qd_b dtau = 0, (dg/dtheta_s qd_a) dtheta_s +
     g dv - dM_s = 0, and dM' = r (Phi_vq e dtheta_s + Phi_vv dv + qdd_b dtau), with g the
     closure's gain (d momentum after / d v) and r the momentum row at q_T."""
-    run = flow.propagate(q0, qd_a, period, np.eye(18))
-    phi = run.sens
+    seeds = np.zeros((18, 10))
+    seeds[:9, 0], seeds[9:, 1:] = THETA_DIRECTION, np.eye(9)
+    sens = flow.propagate(q0, qd_a, period, seeds).sens
+    phi_theta, phi = sens[:, 0], sens[:, 1:]  # d(q, qd)(T) / d theta_s along e_theta, and / d qd(0)
     qdd_b = flow.acceleration(q_t, qd_b)
     gain = hybrid.impact(q_t).closure_gradients()[0]
     gain_theta = _theta_derivative(lambda q: hybrid.impact(q).closure_gradients()[0], q_t) @ qd_a
     row = momentum_row(hybrid, q_t)
     plain = np.zeros((10, 10))
-    plain[:9, :9], plain[:9, 9], plain[9, :9] = phi[:9, 9:], qd_b, gain
+    plain[:9, :9], plain[:9, 9], plain[9, :9] = phi[:9], qd_b, gain
     forcing = np.zeros((10, 2))  # columns: dtheta_s, dM_s
-    forcing[:9, 0], forcing[9, 0], forcing[9, 1] = phi[:9, :9] @ THETA_DIRECTION, gain_theta, -1.0
+    forcing[:9, 0], forcing[9, 0], forcing[9, 1] = phi_theta[:9], gain_theta, -1.0
     response = -np.linalg.solve(plain, forcing)  # (dv, dtau) per (dtheta_s, dM_s)
-    d_qd = phi[9:, 9:] @ response[:9] + np.outer(qdd_b, response[9])  # d qd(tau) per (dtheta_s, dM_s)
-    d_qd[:, 0] += phi[9:, :9] @ THETA_DIRECTION
+    d_qd = phi[9:] @ response[:9] + np.outer(qdd_b, response[9])  # d qd(tau) per (dtheta_s, dM_s)
+    d_qd[:, 0] += phi_theta[9:]
     a, b = row @ d_qd
     jacobian = np.zeros((11, 11))
     jacobian[:10, :10] = plain
     jacobian[:9, 10] = -THETA_DIRECTION
-    jacobian[10, :9], jacobian[10, 9] = b * row @ phi[9:, 9:], b * row @ qdd_b
+    jacobian[10, :9], jacobian[10, 9] = b * row @ phi[9:], b * row @ qdd_b
     jacobian[10, 10] = a + b * _theta_derivative(lambda q: momentum_row(hybrid, q), q_t) @ qd_b
     return SteeringReference(q_t, qd_a, qd_b, period, pelvis_pitch(q_t), float(row @ qd_b), float(a), float(b),
                              jacobian)
@@ -142,14 +145,17 @@ def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.n
 class MomentumSteering:
     """The steered re-aim towards ``ref`` with contraction ``rate`` (rho, in [0, 1)) on
     ``flow``'s grid (the walker's); Newton's iterations run on ``coarse`` (a coarser grid of the
-    same flow, or None for ``flow`` itself) and are finished on ``flow`` by chord steps."""
+    same flow, or None for ``flow`` itself) and are finished on ``flow`` by chord steps.
+    ``transition``: its first step comes from another gait (no chord steps with the orbit's
+    Jacobian for it: they only reach a state near the orbit)."""
 
     def __init__(self, hybrid: HybridStep, flow: BallisticFlow, ref: SteeringReference, rate: float = DEFAULT_RATE,
-                 coarse: BallisticFlow | None = None):
+                 coarse: BallisticFlow | None = None, transition: bool = False):
         if not 0.0 <= rate < 1.0:
             raise ValueError(f"the momentum steering rate must be in [0, 1), got {rate}")
         self.hybrid, self.flow, self.ref, self.rate = hybrid, flow, ref, rate
         self.coarse = coarse or flow
+        self.transition = transition
 
     def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float) -> tuple[np.ndarray, float, float]:
         """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
@@ -158,16 +164,19 @@ class MomentumSteering:
         start of tau. ``SteeringFailed`` if no stage finds a step.
 
         Stages, each tried when the ones before fail: chord steps on the walker's grid with the
-        orbit's Jacobian; Newton with the law from the orbit's values; the plain re-aim (theta' =
+        orbit's Jacobian (not for a transition's first step); Newton with the law from the orbit's values; the plain re-aim (theta' =
         theta_p) by Newton, then the law reached from it in ``HOMOTOPY_STAGES`` stages of its
         right-hand side, as far as it goes (a step that steers less this time, rather than none);
         last, the law along ``HOMOTOPY_STAGES`` touchdowns between the orbit's and this one. Newton
         runs on the coarse grid, finished by chord steps (else Newton) on the walker's."""
         equations = _Equations(self, q_pre, impact, xd_b)
         x0 = np.concatenate([self.ref.qd_a, [duration, self.ref.theta]])
-        result = newton.chord(lambda x: equations(x, False)[::2], x0, self.ref.jacobian, TOLERANCE, CHORD_STEPS,
-                              contraction=0.1)
-        x = result.x if result.converged else None
+        x = None
+        if not self.transition:  # the chord steps reach only a state near the orbit
+            result = newton.chord(lambda x: equations(x, False)[::2], x0, self.ref.jacobian, TOLERANCE, CHORD_STEPS,
+                                  contraction=0.1)
+            x = result.x if result.converged else None
+        self.transition = False
         if x is None:
             result = equations.solve(x0, free_pitch=True)
             x = result.x if result.converged else None

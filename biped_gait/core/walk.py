@@ -207,11 +207,11 @@ class Walker:
         self.guard = self.hybrid.guard(0.5 * orbit.period)
         self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
         self.next_period = orbit.period
-        self.steering = None
+        transition, self.steering = getattr(self, "steering", None) is not None, None
         if self.momentum_rate is not None:
             ref = reference(self.hybrid, self.step_flow, np.asarray(orbit.q0), self.q_t, self.qd_a, self.qd_b, self.period)
             coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
-            self.steering = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse)
+            self.steering = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse, transition)
         elif self.reaim:
             # d q(T) / d qd(0) on the planned orbit: the chord Jacobian of every re-aim.
             seeds = np.vstack([np.zeros((9, 9)), np.eye(9)])
