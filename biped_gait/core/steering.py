@@ -146,16 +146,20 @@ class MomentumSteering:
     """The steered re-aim towards ``ref`` with contraction ``rate`` (rho, in [0, 1)) on
     ``flow``'s grid (the walker's); Newton's iterations run on ``coarse`` (a coarser grid of the
     same flow, or None for ``flow`` itself) and are finished on ``flow`` by chord steps.
-    ``transition``: its first step comes from another gait (no chord steps with the orbit's
-    Jacobian for it: they only reach a state near the orbit)."""
+    ``transition``: its first step comes from another gait, whose last solution (v, tau,
+    theta') was ``transition`` away from that gait's (qd_a, T, theta_p): no chord steps with the
+    orbit's Jacobian then (they only reach a state near the orbit), and Newton starts from this
+    gait's values moved by that offset (in a ramp of transitions, each much like the last, that
+    halves Newton's iterations). ``offset``: the same of this steering's last solution."""
 
     def __init__(self, hybrid: HybridStep, flow: BallisticFlow, ref: SteeringReference, rate: float = DEFAULT_RATE,
-                 coarse: BallisticFlow | None = None, transition: bool = False):
+                 coarse: BallisticFlow | None = None, transition: np.ndarray | None = None):
         if not 0.0 <= rate < 1.0:
             raise ValueError(f"the momentum steering rate must be in [0, 1), got {rate}")
         self.hybrid, self.flow, self.ref, self.rate = hybrid, flow, ref, rate
         self.coarse = coarse or flow
         self.transition = transition
+        self.offset = np.zeros(11)
 
     def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float) -> tuple[np.ndarray, float, float]:
         """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
@@ -164,22 +168,23 @@ class MomentumSteering:
         start of tau. ``SteeringFailed`` if no stage finds a step.
 
         Stages, each tried when the ones before fail: chord steps on the walker's grid with the
-        orbit's Jacobian (not for a transition's first step); Newton with the law from the orbit's values; the plain re-aim (theta' =
-        theta_p) by Newton, then the law reached from it in ``HOMOTOPY_STAGES`` stages of its
-        right-hand side, as far as it goes (a step that steers less this time, rather than none);
-        last, the law along ``HOMOTOPY_STAGES`` touchdowns between the orbit's and this one. Newton
-        runs on the coarse grid, finished by chord steps (else Newton) on the walker's."""
+        orbit's Jacobian (not for a transition's first step); Newton with the law from the orbit's
+        values (moved by the last gait's offset, for a transition's first step); the plain re-aim
+        (theta' = theta_p) by Newton, then the law reached from it in ``HOMOTOPY_STAGES`` stages of
+        its right-hand side, as far as it goes (a step that steers less this time, rather than
+        none); last, the law along ``HOMOTOPY_STAGES`` touchdowns between the orbit's and this one.
+        Newton runs on the coarse grid, finished by chord steps (else Newton) on the walker's."""
         equations = _Equations(self, q_pre, impact, xd_b)
         x0 = np.concatenate([self.ref.qd_a, [duration, self.ref.theta]])
         x = None
-        if not self.transition:  # the chord steps reach only a state near the orbit
+        if self.transition is None:  # the chord steps reach only a state near the orbit
             result = newton.chord(lambda x: equations(x, False)[::2], x0, self.ref.jacobian, TOLERANCE, CHORD_STEPS,
                                   contraction=0.1)
             x = result.x if result.converged else None
-        self.transition = False
         if x is None:
-            result = equations.solve(x0, free_pitch=True)
+            result = equations.solve(x0 if self.transition is None else x0 + self.transition, free_pitch=True)
             x = result.x if result.converged else None
+        self.transition = None
         if x is None:
             x = self._from_plain(equations, x0)
         if x is None:
@@ -188,6 +193,7 @@ class MomentumSteering:
             raise SteeringFailed("re-aiming the next step failed (no solution found): the state is too far from the plan")
         if not x[9] > 0:
             raise SteeringFailed("re-aiming the next step gave a duration <= 0: the state is too far from the plan")
+        self.offset = x - np.concatenate([self.ref.qd_a, [self.ref.period, self.ref.theta]])
         return x[:9], float(x[9]), float(x[10])
 
     def _from_plain(self, equations: "_Equations", x0: np.ndarray) -> np.ndarray | None:

@@ -207,7 +207,8 @@ class Walker:
         self.guard = self.hybrid.guard(0.5 * orbit.period)
         self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
         self.next_period = orbit.period
-        transition, self.steering = getattr(self, "steering", None) is not None, None
+        previous, self.steering = getattr(self, "steering", None), None
+        transition = previous.offset if previous is not None else None
         if self.momentum_rate is not None:
             ref = reference(self.hybrid, self.step_flow, np.asarray(orbit.q0), self.q_t, self.qd_a, self.qd_b, self.period)
             coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
