@@ -5,7 +5,6 @@ recovered to within 1e-3 of the orbit in 10 steps by steering, not by the plain 
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np

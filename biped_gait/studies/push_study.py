@@ -48,9 +48,10 @@ SCAN_FACTOR = 1.5
 MAX_IMPULSE = 50.0  # N s: the scan stops there
 BISECTION_TOLERANCE = 0.02  # relative width of the final bracket
 PHASE = 0.5  # the default: mid-step
-STUDY_DIRECTIONS = {"forward": 0.0, "forward-left": math.pi / 4, "left": math.pi / 2, "backward-left": 3 * math.pi / 4,
-                    "backward": math.pi, "backward-right": -3 * math.pi / 4, "right": -math.pi / 2,
-                    "forward-right": -math.pi / 4}
+STUDY_DIRECTIONS = {"forward": DIRECTIONS["forward"], "forward-left": math.pi / 4, "left": DIRECTIONS["left"],
+                    "backward-left": 3 * math.pi / 4, "backward": DIRECTIONS["backward"], "backward-right": -3 * math.pi / 4,
+                    "right": DIRECTIONS["right"], "forward-right": -math.pi / 4}
+"""The directions of the study (rad from +x towards +y): the named ones of ``push`` and the diagonals."""
 
 
 @dataclass(frozen=True)
