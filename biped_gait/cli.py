@@ -137,6 +137,9 @@ def _study_parsers(sub) -> None:
     page.add_argument("--out", type=Path, default=Path("docs/results.md"),
                       help="the page (figures go beside it), default docs/results.md")
     _add_alpha_step(page)
+    page.add_argument("--walk-alpha-step", type=float, default=5.0, metavar="DEG",
+                      help="spacing of the arm amplitudes of the walk section's closed loops and largest pushes (deg), "
+                      "default 5 (the pushes take about 5 s of CPU time per direction and amplitude)")
     _add_executor(page)
 
 
@@ -277,8 +280,9 @@ def _push_study(args: argparse.Namespace) -> int:
 
 def _results_page(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out")
+    inclusive_range(0.0, 45.0, args.walk_alpha_step, "--walk-alpha-step's")  # checked before any work
     with open_executor(args.workers, args.scheduler) as executor:
-        paths = write_results_page(args.out, executor, math.radians(args.alpha_step))
+        paths = write_results_page(args.out, executor, math.radians(args.alpha_step), math.radians(args.walk_alpha_step))
     print("written: " + ", ".join(str(p) for p in paths))
     return 0
 

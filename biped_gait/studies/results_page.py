@@ -24,7 +24,7 @@ from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from ..core.params import DEFAULT_PARAMS, load_params
 from ..core.gait import Gait
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
-from .walking_page import Walking, compute_walking, walking_figures, walking_section
+from .walking_page import ALPHA_STEP as WALK_ALPHA_STEP, Walking, compute_walking, walking_figures, walking_section
 
 PARAMETER_SETS = (DEFAULT_PARAMS, "aoustin2013-table")  # the default and the paper's table verbatim
 LONG_PERIOD_CASE = max(TABLE_CASES, key=lambda case: case[1])  # (L m, T s)
@@ -408,9 +408,11 @@ def render(
     return "\n".join(lines) + "\n"
 
 
-def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP) -> list[Path]:
+def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP,
+                       walk_alpha_step: float = WALK_ALPHA_STEP) -> list[Path]:
     """Compute the study for both parameter sets (``PARAMETER_SETS``) on ``executor``, write
-    the figures beside ``out`` and the page to ``out``; returns the paths written."""
+    the figures beside ``out`` and the page to ``out``; returns the paths written.
+    ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes."""
     out = Path(out)
     studies = run_study(executor, [load_params(n) for n in PARAMETER_SETS], TABLE_CASES, coarse_step=coarse_step)
     references = {n: Reference.compute(n) for n in PARAMETER_SETS}
@@ -426,7 +428,7 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     all_maps = [compute_maps(study.params, executor) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
-    walking = compute_walking(executor, default)
+    walking = compute_walking(executor, default, walk_alpha_step)
     figures.update(walking_figures(walking, default.params.name))
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)

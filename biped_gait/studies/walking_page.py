@@ -31,9 +31,9 @@ from .executors import planner_for
 from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushLimit, limit_vs_alpha_figure, polar_figure,
                          run_push_study)
 from .study import FIG4_STEP_LENGTHS, FIG5_CASE, Study
+from .sweep import inclusive_range
 
-LOOP_ALPHAS = np.radians(np.arange(0.0, 45.0 + 1e-9, 5.0))  # rad: the closed loops computed
-PUSH_ALPHAS = LOOP_ALPHAS
+ALPHA_STEP = math.radians(5.0)  # rad: the default spacing of the alphas of the closed loops and the pushes
 AXIS_DIRECTIONS = ("forward", "backward", "left", "right")
 DIAGONALS = ("forward-left", "backward-left", "backward-right", "forward-right")
 RAMP_SPEEDS = (0.6, 1.2)  # m/s: from, to and back
@@ -128,15 +128,18 @@ def speed_ramp(params: BipedParams, alpha: float, speeds: tuple[float, float] = 
     return steps[settle:], follower.rule.describe(), note
 
 
-def compute_walking(executor: Executor, study: Study) -> Walking:
-    """The section's numbers for ``study``'s parameter set (the default one), on ``executor``."""
+def compute_walking(executor: Executor, study: Study, alpha_step: float = ALPHA_STEP) -> Walking:
+    """The section's numbers for ``study``'s parameter set (the default one), on ``executor``:
+    closed loops and pushes every ``alpha_step`` (rad) over [0, 45] deg (the pushes: about 5 s
+    of CPU time each direction and alpha; the section's cost)."""
     params = study.params
     alpha_opt = study.comparisons[FIG5_CASE].normal.alpha
     length, period = FIG5_CASE
-    loops = [executor.submit(closed_loop_radius, params, L, period, float(a), s)
-             for L in FIG4_STEP_LENGTHS for a in LOOP_ALPHAS for s in (None, DEFAULT_RATE)]
+    alphas = inclusive_range(0.0, math.radians(45.0), alpha_step, "arm amplitude")
+    loops = [executor.submit(closed_loop_radius, params, L, period, a, s)
+             for L in FIG4_STEP_LENGTHS for a in alphas for s in (None, DEFAULT_RATE)]
     ramp = executor.submit(speed_ramp, params, alpha_opt)
-    cases = [(float(a), d) for a in PUSH_ALPHAS for d in AXIS_DIRECTIONS]
+    cases = [(a, d) for a in alphas for d in AXIS_DIRECTIONS]
     cases += [(a, d) for a in (0.0, alpha_opt) for d in DIAGONALS] + [(alpha_opt, d) for d in AXIS_DIRECTIONS]
     pushes = run_push_study(executor, params, length, period, GaitMode.NORMAL.value, cases)
     plain = run_push_study(executor, params, length, period, GaitMode.NORMAL.value,
