@@ -2,7 +2,8 @@
 ``biped-gait urdf`` (the robot description), and the arm-swing study: ``sweep`` (grids of
 gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effort),
 ``figure`` (the paper's Fig. 4 and Fig. 5) and ``results-page`` (docs/results.md); ``atlas``
-(build, show, check the gait atlases the planner starts from, ``atlas_cli``).
+(build, show, check the gait atlases the planner starts from, ``atlas_cli``); ``push-study``
+(the largest push on the trunk the walker recovers from, per direction and arm amplitude).
 Degrees at this edge; SI and radians inside.
 
 Errors in the input print one line on stderr and exit with status 2, output paths included
@@ -24,13 +25,14 @@ from tqdm import tqdm
 from . import atlas_cli
 from .arguments import OneLineParser, check_output_file, check_output_folder
 from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
-from .core.planner import GaitPlanner, GaitRequest
+from .core.planner import GaitPlanner, GaitRequest, validate_request
 from .core.urdf import make_urdf
 from .recording.recover import check_mcap, is_complete, recover
 from .studies.executors import open_executor
 from .studies.figures import save, sweep_figures
 from .studies.optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
 from .studies.maps import compute_maps, reading
+from .studies import push_study
 from .studies.results_page import maps_figures, write_results_page
 from .studies.study import FIG4_CASES, FIG5_CASE, run_study
 from .studies.sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
@@ -112,10 +114,32 @@ def _study_parsers(sub) -> None:
     maps.add_argument("--out", type=Path, default=Path("maps"), metavar="DIR", help="folder of the PNG files, default maps")
     _add_executor(maps)
 
+    push = sub.add_parser("push-study", help="the largest push on the trunk recovered, per direction and arm amplitude "
+                          "(bisection), with a polar plot")
+    push.add_argument("--step-length", type=float, default=0.45, help="step length L (m), default 0.45")
+    push.add_argument("--period", type=float, default=0.45, help="step period T (s), default 0.45")
+    push.add_argument("--mode", default="normal", help="normal (default) or anti-normal")
+    _add_params(push)
+    push.add_argument("--alpha-deg", nargs="+", type=float, metavar="DEG",
+                      help="arm amplitudes (deg), default 0 and the optimal one")
+    push.add_argument("--directions", nargs="+", default=list(push_study.STUDY_DIRECTIONS), metavar="NAME",
+                      help=f"push directions, default all: {', '.join(push_study.STUDY_DIRECTIONS)}")
+    push.add_argument("--phase", type=float, default=push_study.PHASE,
+                      help=f"when in the step, a fraction of T in [0, 1), default {push_study.PHASE:g}")
+    push.add_argument("--momentum-rate", type=float, default=push_study.DEFAULT_RATE,
+                      help=f"the walker's momentum steering rate in [0, 1), default {push_study.DEFAULT_RATE:g}; "
+                      "negative: the duration-only re-aim")
+    push.add_argument("--out", type=Path, default=Path("push-results"), metavar="DIR",
+                      help="output folder (push.csv, push.json, push-polar.png, push-vs-alpha.png), default push-results")
+    _add_executor(push)
+
     page = sub.add_parser("results-page", help="compute the study and write the results page with its figures")
     page.add_argument("--out", type=Path, default=Path("docs/results.md"),
                       help="the page (figures go beside it), default docs/results.md")
     _add_alpha_step(page)
+    page.add_argument("--walk-alpha-step", type=float, default=5.0, metavar="DEG",
+                      help="spacing of the arm amplitudes of the walk section's closed loops and largest pushes (deg), "
+                      "default 5 (the pushes take about 5 s of CPU time per direction and amplitude)")
     _add_executor(page)
 
 
@@ -224,10 +248,41 @@ def _figure(args: argparse.Namespace) -> int:
     return 0
 
 
+def _push_study(args: argparse.Namespace) -> int:
+    params = load_params(args.params)
+    validate_request(GaitRequest(args.step_length, args.period, 0.0, args.mode), params)
+    if not 0.0 <= args.phase < 1.0:
+        raise ValueError(f"--phase must be in [0, 1), got {args.phase:g}")
+    steering = None if args.momentum_rate < 0 else args.momentum_rate
+    if steering is not None and not steering < 1.0:
+        raise ValueError(f"--momentum-rate must be below 1, got {args.momentum_rate:g}")
+    check_output_folder(args.out, "--out", force=True)
+    push_study.study_cases([], args.directions)  # the names checked before any work
+    if args.alpha_deg is None:
+        optimum = optimal_arm_amplitude(GaitPlanner(params), args.step_length, args.period, args.mode)
+        alphas = [0.0, optimum.alpha]
+        print(f"optimal arm amplitude {math.degrees(optimum.alpha):.2f} deg ({optimum.where})")
+    else:
+        alphas = [math.radians(a) for a in args.alpha_deg]
+    cases = push_study.study_cases(alphas, args.directions)
+    with open_executor(args.workers, args.scheduler) as executor:
+        limits = push_study.run_push_study(executor, params, args.step_length, args.period, args.mode, cases,
+                                           args.phase, steering)
+    paths = push_study.write_results(limits, args.out)
+    title = f"Largest push recovered, L = {args.step_length:g} m, T = {args.period:g} s, phase {args.phase:g} T"
+    paths.append(save(push_study.polar_figure(limits, title), args.out / "push-polar.png"))
+    if len(alphas) > 1:
+        paths.append(save(push_study.limit_vs_alpha_figure(limits, title), args.out / "push-vs-alpha.png"))
+    print("\n".join(push_study.describe(limit) for limit in limits))
+    print("written: " + ", ".join(str(p) for p in paths))
+    return 0
+
+
 def _results_page(args: argparse.Namespace) -> int:
     check_output_file(args.out, "--out")
+    inclusive_range(0.0, 45.0, args.walk_alpha_step, "--walk-alpha-step's")  # checked before any work
     with open_executor(args.workers, args.scheduler) as executor:
-        paths = write_results_page(args.out, executor, math.radians(args.alpha_step))
+        paths = write_results_page(args.out, executor, math.radians(args.alpha_step), math.radians(args.walk_alpha_step))
     print("written: " + ", ".join(str(p) for p in paths))
     return 0
 
@@ -259,7 +314,7 @@ def _recover(args: argparse.Namespace) -> int:
 
 
 STUDY_COMMANDS = {"sweep": _sweep, "optimize-arms": _optimize_arms, "figure": _figure, "results-page": _results_page,
-                  "atlas": atlas_cli.run, "maps": _maps,
+                  "atlas": atlas_cli.run, "maps": _maps, "push-study": _push_study,
                   "recover": _recover}
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import signal
 import subprocess
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from rosbags.highlevel import AnyReader
@@ -16,6 +18,24 @@ def start_node(entry: str, *ros_args: str, cwd: Path) -> subprocess.Popen:
     """Start an entry point (e.g. ``biped-gait-planner``) with ``--ros-args`` in its own
     process, logging to ``cwd/<entry>.log``."""
     return start_entry(entry, list(ros_args), log=cwd / f"{entry}.log", cwd=cwd)
+
+
+@contextmanager
+def planner_process(name: str, cwd: Path) -> Iterator[subprocess.Popen]:
+    """A planner node named ``name``, not recording, stopped (status 0) at the end."""
+    proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", "record:=false", cwd=cwd)
+    yield proc
+    assert stop_node(proc) == 0
+
+
+def start_simulator(cwd: Path, planner: str, *params: str) -> subprocess.Popen:
+    """A simulator node using the planner node ``planner``, recording under ``cwd/bags``, with
+    the parameters ``params`` (NAME:=VALUE)."""
+    args = ["-p", f"plan_service:=/{planner}/plan_gait", "-p", f"optimize_action:=/{planner}/optimize_arm_swing",
+            "-p", f"record_dir:={cwd / 'bags'}"]
+    for param in params:
+        args += ["-p", param]
+    return start_node("biped-gait-simulator", *args, cwd=cwd)
 
 
 def stop_node(proc: subprocess.Popen, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:

@@ -84,5 +84,5 @@ def test_requests_take_the_defaults_and_unknown_modes_are_refused():
 
 def test_the_offline_constants_agree_with_the_interfaces():
     assert {kind.name: int(kind) for kind in EventKind} == {
-        name: getattr(GaitEvent, name) for name in ("TOUCHDOWN", "FALL", "FINISHED", "NOT_STARTED")}
+        name: getattr(GaitEvent, name) for name in ("TOUCHDOWN", "FALL", "FINISHED", "NOT_STARTED", "PUSH")}
     assert MODE_CODES == {PlanGait.Request.NORMAL: GaitMode.NORMAL, PlanGait.Request.ANTI_NORMAL: GaitMode.ANTI_NORMAL}

@@ -24,7 +24,7 @@ from biped_gait.core.urdf import PHYSICAL_JOINTS
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from .ros_helpers import read_bag, start_node, stop_node
+from .ros_helpers import read_bag, planner_process, start_simulator, stop_node
 
 pytestmark = pytest.mark.ros
 
@@ -33,18 +33,12 @@ PLANNER = "sim_test_planner"
 
 @pytest.fixture(scope="module")
 def planner_node(tmp_path_factory):
-    where = tmp_path_factory.mktemp("sim_planner")
-    proc = start_node("biped-gait-planner", "-r", f"__node:={PLANNER}", "-p", "record:=false", cwd=where)
-    yield proc
-    assert stop_node(proc) == 0
+    with planner_process(PLANNER, tmp_path_factory.mktemp("sim_planner")) as proc:
+        yield proc
 
 
 def simulator(where: Path, *params: str) -> subprocess.Popen:
-    args = ["-p", f"plan_service:=/{PLANNER}/plan_gait", "-p", f"optimize_action:=/{PLANNER}/optimize_arm_swing",
-            "-p", f"record_dir:={where / 'bags'}"]
-    for p in params:
-        args += ["-p", p]
-    return start_node("biped-gait-simulator", *args, cwd=where)
+    return start_simulator(where, PLANNER, *params)
 
 
 @pytest.fixture(scope="module")

@@ -68,7 +68,7 @@ def read_walk(bag: Bag) -> Walk | None:
 
 
 def walk_summary(walk: Walk) -> dict:
-    """Steps (one per touchdown event: its time, W, state error, velocity miss), falls, end."""
+    """Steps (one per touchdown event: its time, W, state error, velocity miss), pushes, falls, end."""
     steps = [{
         "step": e.step,
         "touchdown_time": t,
@@ -87,6 +87,8 @@ def walk_summary(walk: Walk) -> dict:
         "max_state_error": max((s["state_error"] for s in steps), default=None),
         "max_velocity_miss": max((s["velocity_miss"] for s in steps), default=None),
         "per_step": steps,
+        "pushes": [{"step": e.step, "time": t, "time_in_step": e.time_in_step, "message": e.message}
+                   for t, e in walk.events if e.kind == EventKind.PUSH],
         "falls": [{"step": e.step, "time": t, "time_in_step": e.time_in_step, "message": e.message}
                   for t, e in walk.events if e.kind == EventKind.FALL],
         "finished": finished[-1] if finished else None,
@@ -143,6 +145,7 @@ def _walk_lines(walk: dict) -> list[str]:
         lines.append(f"  W per step (N m s): {efforts} (total {walk['total_effort_cost']:.3f})")
         lines.append(f"  drift from the plan: state error max {walk['max_state_error']:.3g} (rad, rad/s), "
                      f"velocity miss max {walk['max_velocity_miss']:.3g} rad/s")
+    lines += [f"  {p['message']}" for p in walk["pushes"]]
     falls = [f"  fall in step {f['step']} at {f['time']:.3f} s: {f['message']}" for f in walk["falls"]]
     lines += falls or ["  falls: none"]
     return lines

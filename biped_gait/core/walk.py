@@ -18,7 +18,13 @@ planned touchdown configuration, with the next step's DURATION as the free tenth
 one quantity the impulses cannot set, that momentum, is regulated by how long gravity acts on
 it), under the current impact's momentum closure, so that the target is exactly reachable and
 the next touchdown lands on the plan. It reports |s| for the plan's own velocity as the miss,
-and how far the re-aimed velocity is from the plan's.
+and how far the re-aimed velocity is from the plan's. That momentum is left to decay by
+itself (1 % per step); with ``momentum_rate`` the re-aim also steers it back to the plan's
+(``steering``: the next touchdown's trunk pitch freed).
+
+Between steps the walker can be given a push on the trunk at a time in the next step
+(``push``, core/push.py: the step is split there) and another gait to aim at (``retarget``: the
+next step is a transition step, core/transitions.py).
 
 Everything is in the model's coordinates (stance leg 1 on the right); ``stance_side`` says
 which physical foot that is, and ``stance_foot`` where it is in the world (m). Units SI, rad.
@@ -26,7 +32,7 @@ which physical foot that is, and ``stance_foot`` where it is in the world (m). U
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -38,7 +44,9 @@ from .hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
 from .impulses import EffortOptions, solve_impulses
 from .model import BipedModel
 from .params import load_params
+from .push import AppliedPush, Push, TrunkPush
 from .settings import DEFAULTS, Settings
+from .steering import MomentumSteering, SteeringFailed, reference
 from .world import WorldState, WorldView
 
 
@@ -139,11 +147,13 @@ class CouldNotStart:
 
 @dataclass(frozen=True)
 class StepOutcome:
-    """One step: its samples, and its touchdown or the reason the robot fell."""
+    """One step: its samples, and its touchdown or the reason the robot fell; the pushes that
+    acted in it."""
 
     samples: list[Sample]
     touchdown: Touchdown | None
     fall: str = ""
+    pushes: tuple[AppliedPush, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -163,36 +173,85 @@ class Walker:
     """Walks the gait of ``orbit`` with the dynamics of ``hybrid`` one step per ``walk_step``."""
 
     def __init__(self, hybrid: HybridStep, orbit: PlannedOrbit, rate: float, reaim: bool = True,
-                 settings: Settings = DEFAULTS) -> None:
+                 settings: Settings = DEFAULTS, momentum_rate: float | None = None) -> None:
         """``rate``: samples per second of simulated time; ``reaim``: re-solve each step's BVP
-        from the actual state (else aim at the plan's velocity); ``settings.walk_steps``: RK8
-        steps per period T."""
-        if not orbit.converged:
-            raise ValueError("cannot walk a plan that did not converge")
+        from the actual state (else aim at the plan's velocity); ``momentum_rate``: steer the
+        momentum about the feet line back to the plan's, its error contracting by this factor per
+        step (``steering``, docs/model.md section 8.7; None: the duration-only re-aim of section
+        8.5); ``settings.walk_steps``: RK8 steps per period T."""
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
-        self.hybrid, self.bm, self.orbit, self.rate = hybrid, hybrid.bm, orbit, rate
+        if momentum_rate is not None and not reaim:
+            raise ValueError("steering the momentum is part of the re-aim: it needs reaim")
+        self.hybrid, self.bm, self.rate = hybrid, hybrid.bm, rate
         self.settings = settings
-        self.period = orbit.period
         self.grid = settings.walk_steps
         self.flow = hybrid.flow(1)  # one RK8 step per call: the walker owns the grid
         self.step_flow = hybrid.flow(self.grid)
-        self.guard = hybrid.guard(0.5 * orbit.period)
         self.samples = hybrid.samples
-        self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
+        self.reaim, self.momentum_rate = reaim, momentum_rate
+        self._aim_at(orbit)
         self.state = WalkState(np.array(orbit.q0), np.array(orbit.qd_a),
                                stance_foot=np.array([0.0, -self.bm.params.hip_half_width, 0.0]))
-        self.reaim = reaim
         self.sample_index = 0  # the next sample is at sample_index / rate in the walk (s)
+        self.trunk_push = TrunkPush(self.bm)
+        self._pushes: list[Push] = []  # to act in the current step, by time
+        self._applied: list[AppliedPush] = []
+        self._next_orbit: PlannedOrbit | None = None
+
+    def _aim_at(self, orbit: PlannedOrbit) -> None:
+        """Make ``orbit`` the plan the steps are aimed at (and compared with)."""
+        if not orbit.converged:
+            raise ValueError("cannot walk a plan that did not converge")
+        self.orbit, self.period = orbit, orbit.period
+        self.guard = self.hybrid.guard(0.5 * orbit.period)
+        self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
         self.next_period = orbit.period
-        if reaim:
+        previous, self.steering = getattr(self, "steering", None), None
+        transition = previous.offset if previous is not None else None
+        if self.momentum_rate is not None:
+            ref = reference(self.hybrid, self.step_flow, np.asarray(orbit.q0), self.q_t, self.qd_a, self.qd_b, self.period)
+            coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
+            self.steering = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse, transition)
+        elif self.reaim:
             # d q(T) / d qd(0) on the planned orbit: the chord Jacobian of every re-aim.
             seeds = np.vstack([np.zeros((9, 9)), np.eye(9)])
-            self._phi_qv = self.step_flow.propagate(self.state.q, self.qd_a, self.period, seeds).sens[:9]
+            self._phi_qv = self.step_flow.propagate(np.asarray(orbit.q0), self.qd_a, self.period, seeds).sens[:9]
+
+    def retarget(self, orbit: PlannedOrbit) -> None:
+        """Aim the next step at ``orbit`` (another gait): from the current step's touchdown on, the
+        re-aim steers to it and touchdowns are compared with it (a transition step,
+        docs/model.md section 8.8)."""
+        if not orbit.converged:
+            raise ValueError("cannot walk a plan that did not converge")
+        self._next_orbit = orbit
 
     def shove(self, delta_qd: np.ndarray) -> None:
         """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current step starts with."""
         self.state = replace(self.state, qd=self.state.qd + np.asarray(delta_qd, float))
+
+    def push(self, push: Push) -> None:
+        """Let ``push`` act in the current step (the next ``walk_step``): the step is integrated
+        to its time, the trunk impulse's velocity jump is added, and the integration goes on from
+        there (docs/model.md section 8.6)."""
+        self._pushes = sorted([*self._pushes, push], key=lambda p: p.time_in_step)
+
+    def _until_push(self, t_step: float, h: float) -> float:
+        """The length (s) of the integration step that starts at ``t_step``: ``h``, or less so
+        that it ends at the next push."""
+        if self._pushes and t_step < self._pushes[0].time_in_step < t_step + h:
+            return self._pushes[0].time_in_step - t_step
+        return h
+
+    def _pushed(self, t_step: float, q: np.ndarray, qd: np.ndarray, due: float) -> np.ndarray:
+        """``qd`` after the pushes due by ``due`` (s in the step) acted at (``t_step``, ``q``)."""
+        s = self.state
+        while self._pushes and self._pushes[0].time_in_step <= due + 1e-12:
+            push = self._pushes.pop(0)
+            jump = self.trunk_push.velocity_jump(q, push.impulse, s.stance_side)
+            self._applied.append(AppliedPush(s.step, s.stance_side, s.t + t_step, t_step, push.impulse, jump))
+            qd = qd + jump
+        return qd
 
     def walk_step(self) -> StepOutcome:
         """Integrate the current step until touchdown (or 2 T), then evaluate its samples in one
@@ -205,11 +264,13 @@ class Walker:
         taus: list[float] = []
         touchdown = None
         while touchdown is None and t_step < limit:
-            run = self.flow.propagate(q, qd, h, keep_nodes=True)
+            qd = self._pushed(t_step, q, qd, t_step)
+            dt = self._until_push(t_step, h)
+            run = self.flow.propagate(q, qd, dt, keep_nodes=True)
             nodes = (run.nodes[0] + t_step, *run.nodes[1:])
             runs.append(nodes)
             touchdown = self.guard.touchdown(nodes)
-            t_end = t_step + h if touchdown is None else touchdown
+            t_end = t_step + dt if touchdown is None else touchdown
             # Samples at the instants k / rate of the walk that fall in [start, touchdown): the
             # touchdown instant itself opens the next step (post-impact state).
             while (tau := (self.sample_index + len(taus)) / self.rate - s.t) < t_end - 1e-12 or (
@@ -218,16 +279,21 @@ class Walker:
                 taus.append(tau)
             t_step, q, qd = t_end, run.q, run.qd
         samples, fall = self._samples(runs, taus)
+        pushes, self._applied = tuple(self._applied), []
         if fall:
-            return StepOutcome(samples, None, fall)
+            self._pushes = []
+            return StepOutcome(samples, None, fall, pushes)
         if touchdown is None:
-            return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s")
+            self._pushes = []
+            return StepOutcome(samples, None, f"the swing foot did not land within 2 T = {limit:.3f} s", pushes)
         t_start, q_start, qd_start = runs[-1][0][0], runs[-1][1][0], runs[-1][2][0]
         end = self.flow.propagate(q_start, qd_start, touchdown - t_start)
+        qd_end = self._pushed(touchdown, end.q, end.qd, np.inf)  # pushes later than the touchdown act on it
+        pushes, self._applied = pushes + tuple(self._applied), []
         try:
-            return StepOutcome(samples, self._double_support(end.q, end.qd, touchdown))
+            return StepOutcome(samples, self._double_support(end.q, qd_end, touchdown), pushes=pushes)
         except Fall as exc:
-            return StepOutcome(samples, None, str(exc))
+            return StepOutcome(samples, None, str(exc), pushes)
 
     def _samples(self, runs: list[tuple[np.ndarray, ...]], taus: list[float]) -> tuple[list[Sample], str]:
         """The samples at times ``taus`` (s in the step) on the interpolant of the integration
@@ -237,7 +303,12 @@ class Walker:
         samples: list[Sample] = []
         if not taus:
             return samples, ""
-        nodes = tuple(np.concatenate([run[k][:1] for run in runs] + [runs[-1][k][1:]]) for k in range(4))
+        # Each run's first node, and its last where a push made the velocity jump (both sides
+        # kept: the interpolation on each side of the jump uses its own) and at the end.
+        jumps = [p.time_in_step for p in self._applied]
+        ends = [any(abs(run[0][-1] - t) < 1e-12 for t in jumps) for run in runs[:-1]] + [True]
+        nodes = tuple(np.concatenate([part for run, end in zip(runs, ends) for part in (run[k][:1], run[k][1:2 * end])])
+                      for k in range(4))
         q, qd = hermite_samples(nodes, np.array(taus), side="left")
         evaluated = self.samples.dynamics(q, qd)
         for k, tau in enumerate(taus):
@@ -260,6 +331,10 @@ class Walker:
     def _double_support(self, q_td: np.ndarray, qd_td: np.ndarray, t_step: float) -> Touchdown:
         """Impulses from the actual pre-impact state towards the plan, then the leg exchange."""
         bm, s = self.bm, self.state
+        error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
+        if self._next_orbit is not None:
+            self._aim_at(self._next_orbit)
+            self._next_orbit = None
         impact = self.hybrid.impact(q_td)
         planned = impact.problem(qd_td, self.qd_a)
         reachable, miss = planned.reachable()
@@ -274,7 +349,6 @@ class Walker:
         sol = solve_impulses(problem, self.orbit.effort, self.orbit.options)
         if not sol.success:
             raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
-        error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
         # The new stance foot's world position, then the mirror: the next step in model coordinates.
         tip = bm.swing_tip(q_td)
         new_foot = s.stance_foot + mirror_for(s.stance_side) @ tip
@@ -301,8 +375,15 @@ class Walker:
         (the momentum about the feet line is kept).
 
         Chord steps with the planned orbit's Jacobian: off the orbit by a numerical error
-        only, they converge to rounding level in one or two steps.
+        only, they converge to rounding level in one or two steps. With momentum steering, the
+        steered re-aim (``steering``) instead.
         """
+        if self.steering is not None:
+            try:
+                v, self.next_period, _ = self.steering.solve(exchange(q_start), impact, xd_b, self.next_period)
+            except SteeringFailed as exc:
+                raise Fall(str(exc)) from None
+            return v
         gain, _ = impact.closure_gradients()  # d(momentum after)/d(qd_next)
         target_momentum = float(impact.momentum_row @ xd_b)
         jac = np.zeros((10, 10))
@@ -330,18 +411,23 @@ class Walk:
     """A plan in, an iterator of samples and events out.
 
     Iterating yields, in time order: ``Sample`` (every 1 / ``rate`` s of simulated time, with
-    the robot in world terms), ``Touchdown`` at the end of each step, and at the end one of
-    ``Finished`` (``steps`` steps made; 0 means never), ``Fell``, or ``CouldNotStart`` (then
-    nothing else). ``model`` and ``world`` (None if it could not start) describe the robot.
+    the robot in world terms), ``AppliedPush`` where a push acted, ``Touchdown`` at the end of
+    each step, and at the end one of ``Finished`` (``steps`` steps made; 0 means never),
+    ``Fell``, or ``CouldNotStart`` (then nothing else). ``model`` and ``world`` (None if it
+    could not start) describe the robot. ``momentum_rate``: the walker's momentum steering
+    (``Walker``); ``before_step``: called with the walker before each step (pushes to apply, a
+    gait to aim at: ``Walker.push``, ``Walker.retarget``).
     """
 
     def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,
-                 settings: Settings = DEFAULTS) -> None:
+                 settings: Settings = DEFAULTS, momentum_rate: float | None = None,
+                 before_step: Callable[[Walker], object] | None = None) -> None:
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if steps < 0:
             raise ValueError(f"steps must be 0 (no end) or positive, got {steps}")
         self.orbit, self.rate, self.steps = orbit, rate, steps
+        self.before_step = before_step
         self.problem = ""
         self.model: BipedModel | None = None
         self.world: WorldView | None = None
@@ -358,21 +444,27 @@ class Walk:
             self.problem = str(exc)
             return
         self.world = WorldView(self.model)
-        self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings)
+        self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings, momentum_rate)
 
-    def __iter__(self) -> Iterator[Sample | Touchdown | Fell | Finished | CouldNotStart]:
+    def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
         if self.walker is None:
             yield CouldNotStart(self.problem)
             return
         walker, world = self.walker, self.world
         while self.steps == 0 or walker.state.step < self.steps:
+            if self.before_step is not None:
+                self.before_step(walker)
             s = walker.state
             outcome = walker.walk_step()
+            pushes = list(outcome.pushes)
             if outcome.samples:
                 pictures = world.pictures(np.array([x.q for x in outcome.samples]),
                                           np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
                 for k, sample in enumerate(outcome.samples):
+                    while pushes and pushes[0].t <= sample.t:
+                        yield pushes.pop(0)
                     yield replace(sample, world=pictures.state(k))
+            yield from pushes
             if outcome.touchdown is None:
                 t = outcome.samples[-1].t if outcome.samples else s.t
                 yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)

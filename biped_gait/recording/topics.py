@@ -18,6 +18,8 @@ GAIT_EVENTS = "/gait_events"
 ROBOT_DESCRIPTION = "/robot_description"
 TF = "/tf"
 TF_STATIC = "/tf_static"
+GAIT_PHASE = "/gait_phase"
+CMD_VEL = "/cmd_vel"  # subscribed: the commanded walking speed
 
 GAIT_PLAN_TYPE = "biped_gait_interfaces/msg/GaitPlan"
 PLAN_CALL_TYPE = "biped_gait_interfaces/msg/PlanGaitCall"
@@ -31,6 +33,7 @@ class EventKind(IntEnum):
     FALL = 1
     FINISHED = 2
     NOT_STARTED = 3
+    PUSH = 4
 
 
 # PlanGait NORMAL / ANTI_NORMAL (msg_defs PlanGait.srv) and the core's modes.

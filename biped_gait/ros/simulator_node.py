@@ -9,10 +9,14 @@ planner's ``optimize_arm_swing`` action for the optimal amplitude first).
 Topics (stamps are the walk's simulated time, started at the node's clock):
 ``/joint_states`` (sensor_msgs/JointState, URDF joint names), ``/odom`` (nav_msgs/Odometry,
 pelvis ``base_link`` in ``world``), ``/angular_momentum`` (biped_gait_interfaces/AngularMomentum),
-``/gait_events`` (biped_gait_interfaces/GaitEvent), ``/tf`` (the URDF's moving joints and the
-pelvis in ``world``), and transient-local ``/robot_description`` (std_msgs/String) and
-``/tf_static``. The recording (MCAP, rosbag2 directory under ``record_dir``) holds the same
-bytes as were published.
+``/gait_events`` (biped_gait_interfaces/GaitEvent), ``/gait_phase`` (GaitPhase: which foot
+stands, the step, the double supports), ``/tf`` (the URDF's moving joints and the pelvis in
+``world``), and transient-local ``/robot_description`` (std_msgs/String) and ``/tf_static``. The
+recording (MCAP, rosbag2 directory under ``record_dir``) holds the same bytes as were published.
+
+Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
+recovers by its per-step re-aim, with momentum steering (``recovery``). Speed: ``/cmd_vel``
+(geometry_msgs/Twist, linear.x in m/s), walked with transition steps (``speed_command``).
 
 Outcomes: the walk finished (exit status 0), the robot fell, the walk could not start (a plan
 that cannot be walked, a plan naming a parameter set that is neither shipped nor this node's
@@ -36,6 +40,7 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
+from geometry_msgs.msg import Twist
 from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
@@ -45,22 +50,28 @@ from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
 
 from biped_gait_interfaces.action import OptimizeArmSwing
-from biped_gait_interfaces.msg import AngularMomentum, GaitEvent, GaitPlan
-from biped_gait_interfaces.srv import PlanGait
+from biped_gait_interfaces.msg import AngularMomentum, GaitEvent, GaitPhase, GaitPlan
+from biped_gait_interfaces.srv import PlanGait, Push
 
 from ..core.configurations import GaitMode
 from ..core.pacing import Pacer
 from ..core.params import load_params, shipped_param_names
+from ..core.push import AppliedPush
 from ..core.settings import DEFAULTS
+from ..core.steering import DEFAULT_RATE
 from ..core.text import clip
+from ..core.transitions import MAX_CHANGE, SPEED_RULES
 from ..core.walk import CouldNotStart, Fell, Finished, Sample, Touchdown, Walk
 from ..recording import topics
 from ..recording.writer import DEFAULT_CHUNK_SIZE, McapRecorder, RecordingError
 from .conversions import MODE_TO_MSG, orbit_from_msg
+from .gait_phase import GaitPhases
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
+from .push_service import SCRIPT_FORMAT, PushScheduler, parse_pushes
 from .recorded import RecordedPublisher
+from .speed_command import SpeedCommand
 from .walk_messages import event_msg, joint_state_msg, momentum_msg, odometry_msg, stamp_msg, tf_msg
 
 NODE_NAME = "biped_gait_simulator"
@@ -82,6 +93,17 @@ PARAMETERS = (
     Param("real_time_factor", 1.0, "simulated seconds per wall second; 0: as fast as possible", 0.0, 1000.0),
     Param("publish_rate", 500.0, "samples per second of simulated time (Hz)", 1.0, 100000.0),
     Param("reaim", True, "re-solve each step from the actual state, the open-loop gait being unstable (true/false)"),
+    Param("recovery", "momentum", "the re-aim's unknowns: 'duration' (the next step's duration) or 'momentum' "
+          "(also the next touchdown's trunk pitch, steering the momentum about the feet line back to the plan's)",
+          choices=("momentum", "duration")),
+    Param("momentum_rate", DEFAULT_RATE, "with recovery 'momentum': the momentum error's contraction per step "
+          "(0: dead-beat)", 0.0, 0.99),
+    Param("pushes", "", f"scripted pushes on the trunk: {SCRIPT_FORMAT} (step index, phase as a fraction of T in "
+          "[0, 1), impulse in N s, world axes); also the ~/push service"),
+    Param("speed_rule", SPEED_RULES[0], "how /cmd_vel speeds pick gaits: 'least_effort' (least W per metre among "
+          "walkable atlas gaits; without a current atlas a fixed cadence) or 'cadence' (the plan's period)",
+          choices=SPEED_RULES),
+    Param("max_speed_change", MAX_CHANGE, "largest change of the walked gait's speed per step (m/s)", 0.001, 1.0),
     Param("record", True, "record everything published to MCAP (true/false)"),
     Param("record_dir", "bags", "directory of the recordings (path)"),
     Param("chunk_size", DEFAULT_CHUNK_SIZE, "MCAP chunk size (bytes): at most this much is lost if the process is "
@@ -104,6 +126,7 @@ class SimulatorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
         self.value = value = declare(self, PARAMETERS)
+        self.pushes = PushScheduler(parse_pushes(value["pushes"]))
         self.source = value["plan_source"]
         self.rate = value["publish_rate"]
         self.rtf = value["real_time_factor"]
@@ -134,6 +157,10 @@ class SimulatorNode(Node):
         self.pub_events = publisher(GaitEvent, topics.GAIT_EVENTS, EVENTS)
         self.pub_description = publisher(String, topics.ROBOT_DESCRIPTION, LATCHED)
         self.pub_tf_static = publisher(TFMessage, topics.TF_STATIC, LATCHED)
+        self.phases = GaitPhases(publisher(GaitPhase, topics.GAIT_PHASE, EVENTS))
+        self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"])
+        self.create_subscription(Twist, topics.CMD_VEL, self.speed.on_twist, 10)
+        self.create_service(Push, "~/push", self._on_push, callback_group=self._group)
         if self.source == "topic":
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
@@ -230,6 +257,19 @@ class SimulatorNode(Node):
         raise NoPlan(f"the plan's parameter set {clip(repr(name))} is neither a shipped set "
                      f"({', '.join(shipped_param_names())}) nor this simulator's params file: refused")
 
+    # Pushes and speed --------------------------------------------------------------------
+    def _on_push(self, request: Push.Request, response: Push.Response) -> Push.Response:
+        impulse = [request.impulse.x, request.impulse.y, request.impulse.z]
+        wait = 10.0 + (2 * self.value["period"] / self.rtf if self.rtf > 0 else 0.0)  # s: a step or two, and some
+        response.success, response.message, response.step, response.time = self.pushes.request(impulse, request.phase, wait)
+        self.get_logger().info(f"~/push: {response.message}" if response.success else f"~/push refused: {response.message}")
+        return response
+
+    def _before_step(self, walker) -> None:
+        """The walker is about to walk a step: its pushes, and a transition towards the commanded speed."""
+        self.pushes.before_step(walker)
+        self.speed.before_step(walker)
+
     # The walk -----------------------------------------------------------------------------
     def _run(self) -> None:
         try:
@@ -274,7 +314,12 @@ class SimulatorNode(Node):
         except NoPlan as exc:
             self._not_started(str(exc))
             return
-        walk = Walk(replace(orbit_from_msg(plan), params=params), self.rate, self.steps, reaim=self.value["reaim"])
+        steer = self.value["reaim"] and self.value["recovery"] == "momentum"
+        walk = Walk(replace(orbit_from_msg(plan), params=params), self.rate, self.steps, reaim=self.value["reaim"],
+                    momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step)
+        if walk.walker is not None:
+            self.speed.start(walk.walker, params or None)
+            self.pushes.start()
         start_ns = self.get_clock().now().nanoseconds
         if walk.world is not None:
             stamp = stamp_msg(start_ns)
@@ -284,14 +329,26 @@ class SimulatorNode(Node):
             f"walking L = {plan.step_length:g} m, T = {plan.period:g} s, alpha = {math.degrees(plan.arm_amplitude):.2f} deg "
             f"({walk.orbit.mode}), {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor {self.rtf:g}")
         pacer = Pacer(self.rtf)
+        try:
+            self._run_walk(walk, pacer, start_ns)
+        finally:
+            self.pushes.stop("the walk ended")
+
+    def _run_walk(self, walk: Walk, pacer: Pacer, start_ns: int) -> None:
         for item in walk:
             if isinstance(item, Sample):
                 if not pacer.wait(item.t, self._stop) or not self.context.ok():
                     return
                 self._publish_sample(item, start_ns)
+                self.phases.sample(item.step, item.stance_side, item.t, start_ns)
+            elif isinstance(item, AppliedPush):
+                text = f"push of {item.impulse.tolist()} N s on the trunk in step {item.step} at t = {item.t:.4f} s"
+                self.get_logger().info(text)
+                self._event(GaitEvent.PUSH, item.step, item.stance_side, item.time_in_step, start_ns, item.t, text)
             elif isinstance(item, Touchdown):
                 self._event(GaitEvent.TOUCHDOWN, item.step, item.next_stance_side, item.t_step, start_ns, item.t,
                             f"touchdown of step {item.step}", item)
+                self.phases.touchdown(item.step, item.t, start_ns)
             elif isinstance(item, Fell):
                 self.failed = True
                 self.get_logger().error(f"the robot fell in step {item.step}: {item.reason}")

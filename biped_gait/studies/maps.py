@@ -197,38 +197,20 @@ def ratio_figure(maps: WalkingMaps) -> Figure:
     return fig
 
 
-def stability_figure(atlas: Atlas, curves: Sequence, alpha: float = BOUNDARY_ALPHA) -> Figure:
-    """Open-loop stability: left, the spectral radius of the Poincare map over (L, T) at the
-    atlas alpha nearest ``alpha`` (rad); right, against alpha for the gaits of ``curves`` (the
-    Fig. 4 sweep: L = 0.40, 0.45, 0.50 m, T = 0.45 s, both modes)."""
-    fig, (left, right) = _figure(2)
+def stability_figure(atlas: Atlas, alpha: float = BOUNDARY_ALPHA) -> Figure:
+    """The open-loop spectral radius of the Poincare map over (L, T), at the atlas alpha nearest
+    ``alpha`` (rad), on the admissible nodes (log scale)."""
+    fig, [ax] = _figure()
     k = int(np.argmin(np.abs(atlas.grid.alphas - alpha)))
     radius = np.where(atlas.nodes["status"][:, :, k] == NodeStatus.ADMISSIBLE, atlas.nodes["spectral_radius"][:, :, k],
                       np.nan)
-    mesh = left.pcolormesh(_edges(atlas.grid.step_lengths), _edges(atlas.grid.periods), np.log10(radius).T,
-                           cmap="magma")
-    fig.colorbar(mesh, ax=left, label="log10 spectral radius (open loop)")
-    left.set_xlabel("step length L (m)")
-    left.set_ylabel("period T (s)")
-    left.set_title(f"Open-loop spectral radius, alpha = {math.degrees(atlas.grid.alphas[k]):g} deg "
-                   f"({atlas.params})", fontsize="medium")
-    for (length, mode), colour_style in _curve_styles(curves).items():
-        gaits = sorted((g for g in curves if (g.step_length, g.mode.value) == (length, mode) and g.stability),
-                       key=lambda g: g.arm_amplitude)
-        right.plot([math.degrees(g.arm_amplitude) for g in gaits], [g.stability.spectral_radius for g in gaits],
-                   colour_style[1], color=colour_style[0], label=f"L = {length:g} m, {mode}")
-    right.set_xlabel("arm amplitude alpha (deg)")
-    right.set_ylabel("spectral radius (open loop)")
-    right.set_title("Open-loop spectral radius against alpha, T = 0.45 s", fontsize="medium")
-    right.legend(fontsize="small")
-    right.grid(True, alpha=0.3)
+    mesh = ax.pcolormesh(_edges(atlas.grid.step_lengths), _edges(atlas.grid.periods), np.log10(radius).T, cmap="magma")
+    fig.colorbar(mesh, ax=ax, label="log10 spectral radius (open loop)")
+    ax.set_xlabel("step length L (m)")
+    ax.set_ylabel("period T (s)")
+    ax.set_title(f"Open-loop spectral radius, alpha = {math.degrees(atlas.grid.alphas[k]):g} deg, params "
+                 f"{atlas.params}", fontsize="medium")
     return fig
-
-
-def _curve_styles(curves: Sequence) -> dict[tuple[float, str], tuple[str, str]]:
-    lengths = sorted({g.step_length for g in curves})
-    return {(length, mode.value): (f"C{i}", "-" if mode is GaitMode.NORMAL else "--")
-            for i, length in enumerate(lengths) for mode in GaitMode}
 
 
 # Reading ---------------------------------------------------------------------------------------

@@ -1,7 +1,8 @@
 """``docs/results.md``: the arm-swing study against the paper's numbers (docs/model.md section 7) for
 the default parameter set and the paper's table verbatim, with its figures, the paper's
 claims checked on the computed numbers, and where the project and the paper differ,
-written from the computed evidence.
+written from the computed evidence; then the maps of where walking is possible and the walk
+beyond the paper (stability, pushes, commanded speed: ``walking_page``).
 
 Everything on the page is computed when it is generated (``biped-gait results-page``); only
 the paper's own numbers are constants here. W in N m s, angular momentum in kg m^2/s,
@@ -29,6 +30,7 @@ from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
+from .walking_page import ALPHA_STEP as WALK_ALPHA_STEP, Walking, compute_walking, walking_figures, walking_section
 
 PARAMETER_SETS = (DEFAULT_PARAMS, "aoustin2013-table")  # the default and the paper's table verbatim
 LONG_PERIOD_CASE = max(TABLE_CASES, key=lambda case: case[1])  # (L m, T s)
@@ -365,11 +367,12 @@ def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> l
 @dataclass(frozen=True)
 class Extensions:
     """The page's sections beyond the paper: the maps per parameter set, the stability of the
-    paper's gaits, the reviewer's checks."""
+    paper's gaits, the reviewer's checks, the walk (closed loops, pushes, commanded speed)."""
 
     maps: Sequence[WalkingMaps] = ()
     stability: Sequence[PointStability] = ()
     reviewer: ReviewerChecks | None = None
+    walking: Walking | None = None
 
 
 STABILITY_FIGURE = "stability.png"
@@ -383,7 +386,7 @@ def render(
     """The whole page as Markdown. ``studies``: the default set's and the table set's (in
     that order); ``references`` by set name; ``figures`` maps a caption to a path relative to
     the page; ``coarse_step`` (rad) is the study's alpha spacing; ``extensions`` the sections
-    beyond the paper."""
+    beyond the paper (the walk section's figures' paths start with ``walk-``)."""
     default, table = studies
     lines = [
         "# Arm-swing study: results",
@@ -404,7 +407,7 @@ def render(
         "",
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-              if not path.startswith("map-") and path not in (STABILITY_FIGURE, RATE_FIGURE)]
+              if not path.startswith(("map-", "walk-")) and path not in (STABILITY_FIGURE, RATE_FIGURE)]
     for study in studies:
         label = " (default)" if study is default else ""
         lines += ["", f"## Parameter set `{study.params.name}`{label}", "", "Effort of the double support (N m s):",
@@ -428,15 +431,20 @@ def render(
                   "paper's three points, the normal gait at its optimal alpha and the anti-normal gait at the same "
                   "alpha:", ""]
         lines += stability_lines(extensions.stability, default.curves)
-        lines += ["", f"![Open-loop spectral radius over (L, T) and against alpha]({STABILITY_FIGURE})", ""]
+        lines += ["", f"![Open-loop spectral radius over (L, T)]({STABILITY_FIGURE})", ""]
     if extensions.reviewer is not None:
         lines += reviewer_lines(extensions.reviewer, RATE_FIGURE)
+    if extensions.walking is not None:
+        lines += walking_section(extensions.walking,
+                                 {c: path for c, path in figures.items() if path.startswith("walk-")})
     return "\n".join(lines) + "\n"
 
 
-def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP) -> list[Path]:
+def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP,
+                       walk_alpha_step: float = WALK_ALPHA_STEP) -> list[Path]:
     """Compute the study for both parameter sets (``PARAMETER_SETS``) on ``executor``, write
-    the figures beside ``out`` and the page to ``out``; returns the paths written."""
+    the figures beside ``out`` and the page to ``out``; returns the paths written.
+    ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes."""
     out = Path(out)
     studies = run_study(executor, [load_params(n) for n in PARAMETER_SETS], TABLE_CASES, coarse_step=coarse_step)
     references = {n: Reference.compute(n) for n in PARAMETER_SETS}
@@ -452,21 +460,22 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     all_maps = [compute_maps(study.params, executor, coarse_step=coarse_step) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
-    extensions = _extensions(default, executor, all_maps, coarse_step)
-    figures["Open-loop spectral radius over (L, T) and against alpha"] = (
-        stability_figure(Atlas.load(atlas_path(default.params, GaitMode.NORMAL), default.params), default.curves),
-        STABILITY_FIGURE)
+    extensions = _extensions(default, executor, all_maps, coarse_step, walk_alpha_step)
+    figures["Open-loop spectral radius over (L, T)"] = (
+        stability_figure(Atlas.load(atlas_path(default.params, GaitMode.NORMAL), default.params)), STABILITY_FIGURE)
     figures["Effort against the joint-rate bound"] = (
         rate_bound_figure(extensions.reviewer.rate_curve, default.params.name), RATE_FIGURE)
+    figures.update(walking_figures(extensions.walking, default.params.name))
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, extensions))
     return [*paths, out]
 
 
-def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMaps], coarse_step: float) -> Extensions:
+def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMaps], coarse_step: float,
+                walk_alpha_step: float) -> Extensions:
     """The sections beyond the paper, for the default parameter set, computed on ``executor``
-    (optima bracketed every ``coarse_step`` rad)."""
+    (optima bracketed every ``coarse_step`` rad, the walk's alphas every ``walk_alpha_step``)."""
     params = default.params
     points = [executor.submit(point_stability, params, *case, comparison.normal.alpha, mode)
               for case, comparison in default.comparisons.items() if case in FIG4_CASES
@@ -474,4 +483,5 @@ def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMa
     readings = effort_readings(params, executor, coarse_step)
     checks = ReviewerChecks(readings, rate_bound_curve(params, math.radians(PAPER_ALPHA_DEG)),
                             human_comparison(params, coarse_step=coarse_step))
-    return Extensions(all_maps, [p.result() for p in points], checks)
+    walking = compute_walking(executor, default, walk_alpha_step)
+    return Extensions(all_maps, [p.result() for p in points], checks, walking)

@@ -1,0 +1,40 @@
+"""The simulator's gait phase topic (biped_gait_interfaces/GaitPhase, after the convention of
+biped_interfaces/Phase): published when a phase begins, i.e. at a step's first sample (the
+stance foot of its single support) and at each touchdown (the instantaneous double support).
+No physics here."""
+
+from __future__ import annotations
+
+from std_msgs.msg import Header
+
+from biped_gait_interfaces.msg import GaitPhase
+
+from ..core.world import WORLD_FRAME
+from .walk_messages import stamp_msg
+
+STANCE = {"left": GaitPhase.LEFT_STANCE, "right": GaitPhase.RIGHT_STANCE}
+
+
+class GaitPhases:
+    """Publishes the phases of a walk on ``publisher`` (a ``RecordedPublisher`` of GaitPhase)
+    with stamps ``start_ns`` + the walk time."""
+
+    def __init__(self, publisher) -> None:
+        self.publisher = publisher
+        self._step: int | None = None
+
+    def sample(self, step: int, stance_side: str, t: float, start_ns: int) -> None:
+        """A sample of ``step`` at ``t`` (s in the walk): its single support begins if it is the
+        step's first."""
+        if step != self._step:
+            self._step = step
+            self._publish(STANCE[stance_side], step, t, start_ns)
+
+    def touchdown(self, step: int, t: float, start_ns: int) -> None:
+        """``step`` ends at ``t`` (s in the walk) with the double support."""
+        self._publish(GaitPhase.DOUBLE_STANCE, step, t, start_ns)
+
+    def _publish(self, phase: int, step: int, t: float, start_ns: int) -> None:
+        stamp_ns = start_ns + round(t * 1e9)
+        msg = GaitPhase(header=Header(stamp=stamp_msg(stamp_ns), frame_id=WORLD_FRAME), phase=phase, step=step)
+        self.publisher.publish(msg, stamp_ns)

@@ -1,0 +1,240 @@
+"""The push-recovery study: the largest push on the trunk the walker recovers from, per
+direction and arm amplitude (docs/model.md section 8.6), in parallel on an executor.
+
+A trial walks the gait (L, T, alpha, mode) from its orbit with the simulator's walker (re-aim
+with momentum steering, samples at ``RATE``), pushes the trunk with a horizontal impulse P
+(N s, world axes) at ``phase`` T of the first step (the right foot in stance), and counts as
+**recovered** if the robot does not fall and, ``RECOVERY_STEPS`` steps after the pushed one,
+its state at the step's start is within ``RECOVERY_TOLERANCE`` (rad, rad/s, max-norm) of the
+orbit's start (q0, qd_a).
+
+The largest push per direction: magnitudes from ``SCAN_START`` up by the factor ``SCAN_FACTOR``
+until the first push not recovered, then bisection between it and the last recovered one to
+``BISECTION_TOLERANCE`` (relative). The set of recovered magnitudes need not be an interval (the
+re-aim's boundary-value problem has folds: a push may fail where a larger one is recovered), so
+the figure is the largest push below which every push tried was recovered, and the first
+failure found above it is reported with its reason.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import sys
+from collections.abc import Sequence
+from concurrent.futures import Executor, as_completed
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from tqdm import tqdm
+
+from ..core.hybrid import HybridStep
+from ..core.params import BipedParams
+from ..core.planner import GaitRequest
+from ..core.push import DIRECTIONS, Push, horizontal_impulse
+from ..core.steering import DEFAULT_RATE
+from ..core.walk import PlannedOrbit, Walker
+from .executors import planner_for
+
+RECOVERY_STEPS = 10
+RECOVERY_TOLERANCE = 1e-3  # rad, rad/s
+RATE = 500.0  # Hz: samples per second, as the simulator's default (falls are found at samples)
+SCAN_START = 0.05  # N s
+SCAN_FACTOR = 1.5
+MAX_IMPULSE = 50.0  # N s: the scan stops there
+BISECTION_TOLERANCE = 0.02  # relative width of the final bracket
+PHASE = 0.5  # the default: mid-step
+STUDY_DIRECTIONS = {"forward": DIRECTIONS["forward"], "forward-left": math.pi / 4, "left": DIRECTIONS["left"],
+                    "backward-left": 3 * math.pi / 4, "backward": DIRECTIONS["backward"], "backward-right": -3 * math.pi / 4,
+                    "right": DIRECTIONS["right"], "forward-right": -math.pi / 4}
+"""The directions of the study (rad from +x towards +y): the named ones of ``push`` and the diagonals."""
+
+
+@dataclass(frozen=True)
+class PushTrial:
+    """One push of ``magnitude`` (N s): recovered or not, and what happened (the fall with its
+    step and time, or the distance to the orbit after the recovery steps, rad / rad/s)."""
+
+    magnitude: float
+    recovered: bool
+    outcome: str
+    distance: float
+
+
+@dataclass(frozen=True)
+class PushLimit:
+    """The largest push recovered (``limit``, N s; 0 if the smallest tried fails) in
+    ``direction`` (name; ``angle`` rad from +x towards +y) at arm amplitude ``alpha`` (rad) and
+    ``phase`` (fraction of T), with the first failure above it (N s, inf if none up to
+    ``MAX_IMPULSE``) and every trial; ``steering``: the momentum steering rate (None: the
+    duration-only re-aim)."""
+
+    direction: str
+    angle: float
+    alpha: float
+    phase: float
+    steering: float | None
+    limit: float
+    first_failure: float
+    failure: str
+    trials: tuple[PushTrial, ...]
+
+
+def push_trial(hybrid: HybridStep, orbit: PlannedOrbit, magnitude: float, angle: float, phase: float,
+               steering: float | None = DEFAULT_RATE) -> PushTrial:
+    """Walk ``orbit`` and push the trunk with ``magnitude`` (N s) in the horizontal direction
+    ``angle`` (rad) at ``phase`` T of the first step; recovered or not (module docstring)."""
+    walker = Walker(hybrid, orbit, rate=RATE, momentum_rate=steering)
+    walker.push(Push(horizontal_impulse(magnitude, angle), phase * orbit.period))
+    start = np.concatenate([orbit.q0, orbit.qd_a])
+    for _ in range(RECOVERY_STEPS + 1):
+        step = walker.state.step
+        outcome = walker.walk_step()
+        if outcome.touchdown is None:
+            t = outcome.samples[-1].t if outcome.samples else walker.state.t
+            return PushTrial(magnitude, False, f"fell in step {step} at t = {t:.3f} s: {outcome.fall}", math.nan)
+    distance = float(np.max(np.abs(np.concatenate([walker.state.q, walker.state.qd]) - start)))
+    recovered = distance < RECOVERY_TOLERANCE
+    text = "recovered" if recovered else f"not back on the orbit after {RECOVERY_STEPS} steps"
+    return PushTrial(magnitude, recovered, f"{text} (distance {distance:.1e})", distance)
+
+
+def largest_push(hybrid: HybridStep, orbit: PlannedOrbit, direction: str, angle: float, phase: float = PHASE,
+                 steering: float | None = DEFAULT_RATE) -> PushLimit:
+    """The largest push recovered in ``direction`` (scan, then bisection; module docstring)."""
+    trials = []
+
+    def trial(magnitude: float) -> PushTrial:
+        trials.append(push_trial(hybrid, orbit, magnitude, angle, phase, steering))
+        return trials[-1]
+
+    low, high, failed = 0.0, SCAN_START, None
+    while high <= MAX_IMPULSE:
+        result = trial(high)
+        if not result.recovered:
+            failed = result
+            break
+        low, high = high, high * SCAN_FACTOR
+    while failed is not None and high - low > BISECTION_TOLERANCE * high:
+        middle = 0.5 * (low + high)
+        result = trial(middle)
+        if result.recovered:
+            low = middle
+        else:
+            high, failed = middle, result
+    return PushLimit(direction, angle, orbit.arm_amplitude, phase, steering, low,
+                     failed.magnitude if failed else math.inf, failed.outcome if failed else "", tuple(trials))
+
+
+def push_task(params: BipedParams, step_length: float, period: float, alpha: float, mode: str, direction: str,
+              phase: float = PHASE, steering: float | None = DEFAULT_RATE) -> PushLimit:
+    """Worker entry: plan the gait with this worker's planner, then ``largest_push``."""
+    planner = planner_for(params)
+    gait = planner.plan(GaitRequest(step_length, period, alpha, mode))
+    if not gait.admissible:
+        raise ValueError(f"the gait L = {step_length:g} m, T = {period:g} s, alpha = {math.degrees(alpha):.2f} deg "
+                         f"({mode}) is not admissible: {'; '.join(gait.reasons)}")
+    return largest_push(planner.hybrid, PlannedOrbit.of(gait), direction, STUDY_DIRECTIONS[direction], phase, steering)
+
+
+def run_push_study(executor: Executor, params: BipedParams, step_length: float, period: float, mode: str,
+                   cases: Sequence[tuple[float, str]], phase: float = PHASE,
+                   steering: float | None = DEFAULT_RATE) -> list[PushLimit]:
+    """``largest_push`` for each (alpha rad, direction name) of ``cases``, all at once on
+    ``executor``, with a progress bar on stderr; in the order of ``cases``."""
+    futures = {executor.submit(push_task, params, step_length, period, alpha, mode, direction, phase, steering): k
+               for k, (alpha, direction) in enumerate(cases)}
+    results: list[PushLimit | None] = [None] * len(cases)
+    with tqdm(total=len(futures), unit="direction", desc="push study", file=sys.stderr) as bar:
+        for future in as_completed(futures):
+            results[futures[future]] = future.result()
+            bar.update()
+    return results
+
+
+def study_cases(alphas: Sequence[float], directions: Sequence[str]) -> list[tuple[float, str]]:
+    """Every (alpha, direction); ``ValueError`` for an unknown direction name."""
+    unknown = [d for d in directions if d not in STUDY_DIRECTIONS]
+    if unknown:
+        raise ValueError(f"unknown push direction {unknown[0]!r}: use {', '.join(STUDY_DIRECTIONS)}")
+    return [(alpha, direction) for alpha in alphas for direction in directions]
+
+
+# Output --------------------------------------------------------------------------------------
+
+def limit_record(limit: PushLimit) -> dict:
+    """A limit as JSON-ready values (angles also in degrees; inf as null)."""
+    record = asdict(limit)
+    record["alpha_deg"] = round(math.degrees(limit.alpha), 9)
+    record["angle_deg"] = round(math.degrees(limit.angle), 9)
+    record["first_failure"] = limit.first_failure if math.isfinite(limit.first_failure) else None
+    record["trials"] = [{**asdict(t), "distance": t.distance if math.isfinite(t.distance) else None} for t in limit.trials]
+    return record
+
+
+def write_results(limits: Sequence[PushLimit], out: Path) -> list[Path]:
+    """``push.csv`` (one row a direction and alpha) and ``push.json`` (with every trial) in ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    records = [limit_record(limit) for limit in limits]
+    columns = ["direction", "angle_deg", "alpha_deg", "phase", "steering", "limit", "first_failure", "failure"]
+    with open(out / "push.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=columns)
+        writer.writeheader()
+        writer.writerows({c: r[c] for c in columns} for r in records)
+    (out / "push.json").write_text(json.dumps({"recovery_steps": RECOVERY_STEPS, "recovery_tolerance": RECOVERY_TOLERANCE,
+                                               "limits": records}, indent=1))
+    return [out / "push.csv", out / "push.json"]
+
+
+def _figure(polar: bool = False) -> tuple[Figure, object]:
+    fig = Figure(figsize=(6.4, 5.2), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig, fig.add_subplot(projection="polar" if polar else None)
+
+
+def polar_figure(limits: Sequence[PushLimit], title: str) -> Figure:
+    """The largest push recovered (N s) against its direction, one closed curve per alpha (world
+    axes: forward up, left to the left, as seen from above)."""
+    fig, ax = _figure(polar=True)
+    ax.set_theta_zero_location("N")  # forward up; angles counter-clockwise: left to the left
+    for i, alpha in enumerate(sorted({limit.alpha for limit in limits})):
+        curve = sorted((limit for limit in limits if limit.alpha == alpha), key=lambda limit: limit.angle % (2 * math.pi))
+        angles = [limit.angle % (2 * math.pi) for limit in curve]
+        values = [limit.limit for limit in curve]
+        ax.plot(angles + angles[:1], values + values[:1], "o-", color=f"C{i}", markersize=4,
+                label=f"alpha = {math.degrees(alpha):.1f} deg")
+    ax.set_xticks(np.radians([0, 45, 90, 135, 180, 225, 270, 315]),
+                  ["forward", "", "left", "", "backward", "", "right", ""])
+    ax.set_rlabel_position(112.5)  # the push scale between the named directions
+    ax.set_title(title, fontsize="medium", pad=18)
+    ax.legend(fontsize="small", loc="lower left", bbox_to_anchor=(-0.15, -0.12))
+    return fig
+
+
+def limit_vs_alpha_figure(limits: Sequence[PushLimit], title: str) -> Figure:
+    """The largest push recovered (N s) against alpha (deg), one curve per direction."""
+    fig, ax = _figure()
+    for i, direction in enumerate(dict.fromkeys(limit.direction for limit in limits)):
+        curve = sorted((limit for limit in limits if limit.direction == direction), key=lambda limit: limit.alpha)
+        ax.plot([math.degrees(limit.alpha) for limit in curve], [limit.limit for limit in curve], "o-", color=f"C{i}",
+                markersize=4, label=direction)
+    ax.set_xlabel("arm amplitude alpha (deg)")
+    ax.set_ylabel("largest push recovered (N s)")
+    ax.set_yscale("log")
+    ax.set_title(title, fontsize="medium")
+    ax.grid(True, alpha=0.3, which="both")
+    ax.legend(fontsize="small")
+    return fig
+
+
+def describe(limit: PushLimit) -> str:
+    """One line: the limit, its direction and alpha, and the first failure above it."""
+    above = (f"first failure {limit.first_failure:.3f} N s: {limit.failure}" if math.isfinite(limit.first_failure)
+             else f"no failure up to {MAX_IMPULSE:g} N s")
+    return (f"{limit.direction:>14s}, alpha = {math.degrees(limit.alpha):5.2f} deg: largest push recovered "
+            f"{limit.limit:.3f} N s ({above})")
+
