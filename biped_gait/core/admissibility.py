@@ -3,7 +3,8 @@ conditions that limit it, each a bit of a bitmask so that an atlas can store whi
 
 Conditions, checked a posteriori on the ballistic step (margins: a figure counts as positive
 when above them): the vertical ground reaction stays positive (N); the swing tip stays above the
-ground on (0.05 T, 0.95 T) (m); the swing knee never bends backwards (q9 >= -KNEE_TOLERANCE
+ground on (0.05 T, 0.95 T) (m), and reaches it from above (above it on [0.95 T, T), moving down
+or not at all at T); the swing knee never bends backwards (q9 >= -KNEE_TOLERANCE
 rad; negative q9 is a hyperextended swing knee, the mark of the backward-knee twin); the ground
 reaction stays in the friction cone of the parameter set's coefficient (max |F_xy| / F_z <= mu).
 Before these: the BVP converged and the double support's impulse problem has a solution.
@@ -33,6 +34,7 @@ class Limit(IntFlag):
     CLEARANCE = 8  # the swing tip touches or enters the ground
     KNEE_HYPEREXTENSION = 16  # the swing knee bends backwards (q9 < 0)
     FRICTION = 32  # the ground reaction leaves the friction cone
+    ARRIVAL = 64  # the swing tip reaches the ground from below (it went under it before T)
 
 
 LIMIT_NAMES = {
@@ -42,6 +44,7 @@ LIMIT_NAMES = {
     Limit.CLEARANCE: "swing clearance",
     Limit.KNEE_HYPEREXTENSION: "knee hyperextension",
     Limit.FRICTION: "friction ratio",
+    Limit.ARRIVAL: "arrival from below",
 }
 
 
@@ -64,9 +67,11 @@ def failure_message(step: BvpSolution, impulses: ImpulseSolution | None) -> str:
 
 
 def figure_limits(min_grf_z: float, min_swing_height: float, q9_min: float, max_friction_ratio: float,
-                  friction: float) -> Limit:
-    """The conditions a solved ballistic step violates, from its figures (N, m, rad, -)."""
+                  friction: float, min_late_swing_height: float, swing_arrival_speed: float) -> Limit:
+    """The conditions a solved ballistic step violates, from its figures (N, m, rad, -, m, m/s)."""
     limits = Limit(0)
+    if not (min_late_swing_height > HEIGHT_MARGIN and swing_arrival_speed <= 0.0):
+        limits |= Limit.ARRIVAL
     if not min_grf_z > GRF_MARGIN:
         limits |= Limit.GROUND_REACTION
     if not min_swing_height > HEIGHT_MARGIN:
@@ -79,7 +84,7 @@ def figure_limits(min_grf_z: float, min_swing_height: float, q9_min: float, max_
 
 
 def describe(limits: Limit, min_grf_z: float, min_swing_height: float, q9_min: float, max_friction_ratio: float,
-             friction: float) -> list[str]:
+             friction: float, min_late_swing_height: float, swing_arrival_speed: float) -> list[str]:
     """One line per violated figure condition of ``limits``, with its value."""
     lines = []
     if Limit.GROUND_REACTION in limits:
@@ -90,6 +95,9 @@ def describe(limits: Limit, min_grf_z: float, min_swing_height: float, q9_min: f
         lines.append(f"swing knee bends backwards (min q9 {math.degrees(q9_min):.3g} deg)")
     if Limit.FRICTION in limits:
         lines.append(f"friction ratio {max_friction_ratio:.3g} exceeds the friction coefficient {friction:g}")
+    if Limit.ARRIVAL in limits:
+        lines.append(f"swing tip reaches the ground from below (height {min_late_swing_height:.3g} m before the "
+                     f"touchdown, vertical speed {swing_arrival_speed:.3g} m/s at it)")
     return lines
 
 
@@ -101,6 +109,7 @@ def judge(step: BvpSolution, impulses: ImpulseSolution | None, figures: StepFigu
         return Verdict(False, (message or "the ballistic BVP did not converge",), Limit.NO_CONVERGENCE)
     if impulses is None or not math.isfinite(impulses.W):
         return Verdict(False, (message or "the impulse problem has no solution",), Limit.NO_IMPULSES)
-    values = (figures.min_grf_z, figures.min_swing_height, figures.q9_min, figures.max_friction_ratio, friction)
+    values = (figures.min_grf_z, figures.min_swing_height, figures.q9_min, figures.max_friction_ratio, friction,
+              figures.min_late_swing_height, figures.swing_arrival_speed)
     limits = figure_limits(*values)
     return Verdict(not limits, tuple(describe(limits, *values)), limits)

@@ -44,6 +44,7 @@ NODE_ARRAYS = {
     "W": ((), np.float64), "min_grf_z": ((), np.float64), "min_swing_height": ((), np.float64),
     "max_friction_ratio": ((), np.float64), "q9_min": ((), np.float64), "h_t_minus": ((2,), np.float64),
     "h_t_plus": ((2,), np.float64), "spectral_radius": ((), np.float64),
+    "min_late_swing_height": ((), np.float64), "swing_arrival_speed": ((), np.float64),
 }
 
 
@@ -189,7 +190,8 @@ class Atlas:
             return ["no gait converges"]
         n = self.nodes
         return describe(Limit(int(n["limits"][index])), float(n["min_grf_z"][index]), float(n["min_swing_height"][index]),
-                        float(n["q9_min"][index]), float(n["max_friction_ratio"][index]), self.friction)
+                        float(n["q9_min"][index]), float(n["max_friction_ratio"][index]), self.friction,
+                        float(n["min_late_swing_height"][index]), float(n["swing_arrival_speed"][index]))
 
     def hint(self, point: tuple[float, float, float]) -> str:
         """Where the nearest admissible gaits are, for a refusal at (L m, T s, alpha rad): the

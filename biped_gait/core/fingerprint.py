@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .params import BipedParams
 
-ATLAS_FORMAT = 2
+ATLAS_FORMAT = 3
 _CORE = Path(__file__).resolve().parent
 # The modules whose code decides a gait's solution and verdict.
 MODEL_CODE = ("model.py", "configurations.py", "rk8_tableau.py", "flow.py", "hybrid.py", "newton.py",

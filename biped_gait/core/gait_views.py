@@ -111,6 +111,8 @@ FIELDS: tuple[Field, ...] = (
     Field("new_stance_foot", _ds("new_stance_foot", [])),
     Field("min_grf_z", _figure("min_grf_z"), "min_grf_z"),
     Field("min_swing_height", _figure("min_swing_height"), "min_swing_height"),
+    Field("min_late_swing_height", _figure("min_late_swing_height")),
+    Field("swing_arrival_speed", _figure("swing_arrival_speed")),
     Field("max_friction_ratio", _figure("max_friction_ratio"), "max_friction_ratio"),
     Field("q3_range", _figure("q3_range", [])),
     Field("q5_range", _figure("q5_range", [])),

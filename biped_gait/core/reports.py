@@ -8,6 +8,8 @@ vertical, N m), by inverse dynamics (``samples``, reported) and by Newton-Euler 
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -66,6 +68,8 @@ class StepFigures:
     q5_range: tuple[float, float]
     q9_min: float
     energy_drift: float
+    min_late_swing_height: float  # m, on [0.95 T, T): where the swing tip comes down to the ground
+    swing_arrival_speed: float  # m/s, the swing tip's vertical velocity at the touchdown (T-)
 
     def without_samples(self) -> "StepFigures":
         """These figures without the sampled curves."""
@@ -76,12 +80,15 @@ def step_figures(
     samples: SampleEvaluator, t: np.ndarray, q: np.ndarray, qd: np.ndarray, period: float, drift: float
 ) -> StepFigures:
     """The figures of a step sampled at times ``t`` (s) in states (q, qd) (rows), evaluated in one
-    call: ground reaction, swing clearance on (0.05 T, 0.95 T), friction ratio, joint ranges, yaw
-    momentum, and the integration's energy ``drift``."""
+    call: ground reaction, swing clearance on (0.05 T, 0.95 T) and on [0.95 T, T), the swing
+    tip's vertical velocity at the last sample (the touchdown, t = T), friction ratio, joint
+    ranges, yaw momentum, and the integration's energy ``drift``."""
     evaluated = samples.dynamics(q, qd)
     grf = evaluated.grf
     interior = (t > 0.05 * period) & (t < 0.95 * period)
     heights = evaluated.swing_height[interior]
+    late = evaluated.swing_height[(t >= 0.95 * period) & (t < t[-1])]
+    _, arrival = samples.swing_tip_motion(q[-1:], qd[-1:])
     fz = grf[:, 2]
     ratio = np.where(fz > 0, np.hypot(grf[:, 0], grf[:, 1]) / np.where(fz > 0, fz, 1.0), np.inf)
     return StepFigures(
@@ -95,4 +102,6 @@ def step_figures(
         q5_range=(float(q[:, 4].min()), float(q[:, 4].max())),
         q9_min=float(q[:, 8].min()),
         energy_drift=drift,
+        min_late_swing_height=float(late.min()) if late.size else math.inf,
+        swing_arrival_speed=float(arrival[0]),
     )

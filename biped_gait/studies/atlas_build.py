@@ -55,7 +55,8 @@ def node_record(gait: Gait | None, on_branch: bool) -> dict[str, object]:
     if gait.figures is not None:
         f = gait.figures
         record.update(min_grf_z=f.min_grf_z, min_swing_height=f.min_swing_height,
-                      max_friction_ratio=f.max_friction_ratio, q9_min=f.q9_min)
+                      max_friction_ratio=f.max_friction_ratio, q9_min=f.q9_min,
+                      min_late_swing_height=f.min_late_swing_height, swing_arrival_speed=f.swing_arrival_speed)
     if gait.double_support is not None:
         record.update(h_t_minus=gait.double_support.h_t_minus, h_t_plus=gait.double_support.h_t_plus)
     if gait.stability is not None:

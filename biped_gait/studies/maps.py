@@ -36,7 +36,7 @@ from .optimize import COARSE_STEP, NoAdmissibleGait, compare_modes
 BOUNDARY_ALPHA = math.radians(25.0)  # rad: near the optima of the default set
 ADMISSIBLE = "admissible"
 CATEGORIES = (ADMISSIBLE, *LIMIT_NAMES.values(), "backward-knee twin only")
-COLOURS = ("#4daf4a", "#999999", "#a65628", "#e41a1c", "#ff7f00", "#377eb8", "#984ea3", "#f781bf")
+COLOURS = ("#4daf4a", "#999999", "#a65628", "#e41a1c", "#ff7f00", "#377eb8", "#984ea3", "#ffff33", "#f781bf")
 
 
 @dataclass(frozen=True)
