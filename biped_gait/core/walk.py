@@ -39,7 +39,7 @@ from .impulses import EffortOptions, solve_impulses
 from .model import BipedModel
 from .params import load_params
 from .settings import DEFAULTS, Settings
-from .world import WorldState, WorldView
+from .world import WorldPictures, WorldState, WorldView
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,20 @@ class Sample:
     stance_side: str = "right"
     stance_foot: np.ndarray | None = None
     world: WorldState | None = None
+
+
+@dataclass(frozen=True)
+class StepSamples:
+    """The samples of one step as ``Walk.batches`` yields them: each ``Sample`` (without its
+    ``world``), and the robot in world terms at their instants, one row each."""
+
+    samples: list[Sample]
+    world: WorldPictures
+
+    @property
+    def t(self) -> np.ndarray:
+        """The samples' times in the walk (s)."""
+        return np.array([sample.t for sample in self.samples])
 
 
 @dataclass(frozen=True)
@@ -332,7 +346,7 @@ class Walk:
     Iterating yields, in time order: ``Sample`` (every 1 / ``rate`` s of simulated time, with
     the robot in world terms), ``Touchdown`` at the end of each step, and at the end one of
     ``Finished`` (``steps`` steps made; 0 means never), ``Fell``, or ``CouldNotStart`` (then
-    nothing else). ``model`` and ``world`` (None if it could not start) describe the robot.
+    nothing else). ``batches`` yields the same with each step's samples at once, as arrays. ``model`` and ``world`` (None if it could not start) describe the robot.
     """
 
     def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,
@@ -361,6 +375,15 @@ class Walk:
         self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings)
 
     def __iter__(self) -> Iterator[Sample | Touchdown | Fell | Finished | CouldNotStart]:
+        for item in self.batches():
+            if isinstance(item, StepSamples):
+                for k, sample in enumerate(item.samples):
+                    yield replace(sample, world=item.world.state(k))
+            else:
+                yield item
+
+    def batches(self) -> Iterator[StepSamples | Touchdown | Fell | Finished | CouldNotStart]:
+        """As iterating, but the samples of a step come at once, as a ``StepSamples`` (arrays)."""
         if self.walker is None:
             yield CouldNotStart(self.problem)
             return
@@ -369,10 +392,9 @@ class Walk:
             s = walker.state
             outcome = walker.walk_step()
             if outcome.samples:
-                pictures = world.pictures(np.array([x.q for x in outcome.samples]),
-                                          np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
-                for k, sample in enumerate(outcome.samples):
-                    yield replace(sample, world=pictures.state(k))
+                yield StepSamples(outcome.samples, world.pictures(np.array([x.q for x in outcome.samples]),
+                                                                  np.array([x.qd for x in outcome.samples]),
+                                                                  s.stance_side, s.stance_foot))
             if outcome.touchdown is None:
                 t = outcome.samples[-1].t if outcome.samples else s.t
                 yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)

@@ -18,6 +18,7 @@ GAIT_EVENTS = "/gait_events"
 ROBOT_DESCRIPTION = "/robot_description"
 TF = "/tf"
 TF_STATIC = "/tf_static"
+CLOCK = "/clock"
 
 GAIT_PLAN_TYPE = "biped_gait_interfaces/msg/GaitPlan"
 PLAN_CALL_TYPE = "biped_gait_interfaces/msg/PlanGaitCall"

@@ -6,7 +6,8 @@
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
   transient-local, depth 1, so a late subscriber gets the latest one;
 - recording (parameter ``record``): every request with its response (PlanGaitCall messages on
-  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``.
+  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``, by a writer
+  thread: an exchange is queued as it is answered and serialized and written off the request path.
 
 A thin node: requests are converted and handed to the core (``GaitPlanner``); nothing a client
 sends can stop it (bad input gets ``success = false`` and a message; text from a request is
@@ -42,6 +43,7 @@ from ..core.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from ..core.planner import GaitPlanner
 from ..core.settings import DEFAULTS
 from ..core.text import clip
+from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
@@ -109,11 +111,11 @@ class GaitPlannerNode(Node):
         self._in_flight = InFlight()
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
-        self.recorder: McapRecorder | None = None
+        self.recorder: BackgroundRecorder | None = None
         if value["record"]:
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
             try:
-                self.recorder = McapRecorder(value["record_dir"], f"planner_{stamp}")
+                self.recorder = BackgroundRecorder(McapRecorder(value["record_dir"], f"planner_{stamp}"))
                 self.get_logger().info(f"recording to {self.recorder.path}")
             except RecordingError as exc:
                 self.get_logger().error(f"{exc}; serving without recording")
@@ -279,9 +281,10 @@ class GaitPlannerNode(Node):
         included); ``RecordingError`` if the file could not be finished."""
         self._closing.set()
         self._in_flight.wait_idle(CLOSE_WAIT)
-        if self.recorder is not None and not self.recorder.closed:
+        if self.recorder is not None:
             self.recorder.close()
-            rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
+            if not self.recorder.failure:
+                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
 
 
 def check_goal(goal: OptimizeArmSwing.Goal) -> None:
