@@ -112,7 +112,7 @@ class WorldView:
         self.placements = JointPlacements(self.urdf_model, native)
         self._columns = [self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in PHYSICAL_JOINTS]
         # (parent link, child link) of every moving joint, in the URDF model's order.
-        self._frames = tuple(
+        self.link_frames = tuple(
             (BASE_FRAME if self.urdf_model.parents[jid] == 0 else self._link_of_joint(self.urdf_model.parents[jid]),
              self._link_of_joint(jid))
             for jid in range(1, self.urdf_model.njoints)
@@ -157,7 +157,7 @@ class WorldView:
             com=stance_foot + mirror * poses.com,
             momentum_about_foot=axial * poses.angular_momentum,
             momentum_about_com=axial * h_com,
-            link_frames=self._frames,
+            link_frames=self.link_frames,
             link_translations=translations,
             link_quaternions=quaternions,
         )

@@ -60,11 +60,12 @@ class BackgroundRecorder:
     def write(self, topic: str, data: Payload, stamp_ns: int | None = None) -> None:
         """Queue ``data`` (CDR bytes, or a function giving them) on ``topic`` at ``stamp_ns``
         (default: now); ``RecordingError`` once after the writer failed; nothing once closed."""
-        self._check()
-        if self.closed:
+        if self._error is not None or self._closing:
+            self._check()
             return
-        self._queue.append((topic, data, time.time_ns() if stamp_ns is None else int(stamp_ns)))
-        if len(self._queue) >= self._max_pending:
+        queue = self._queue
+        queue.append((topic, data, time.time_ns() if stamp_ns is None else stamp_ns))
+        if len(queue) >= self._max_pending:
             self._wait_for_room()
 
     def _check(self) -> None:
@@ -88,7 +89,7 @@ class BackgroundRecorder:
             closing = self._closing
             batch = [queue.popleft() for _ in range(len(queue))]
             try:
-                self.recorder.write_many([(topic, data if isinstance(data, bytes) else data(), stamp)
+                self.recorder.write_many([(topic, data if isinstance(data, bytes) else data(), int(stamp))
                                           for topic, data, stamp in batch])
             except RecordingError as exc:
                 self._error = exc

@@ -152,7 +152,7 @@ class SimulatorNode(Node):
                         topics.ANGULAR_MOMENTUM: self.pub_momentum, topics.TF: self.pub_tf}
         self.clock = SimClock(self)
         self.controls = SimControls(self, self._group)
-        self._messages: SampleMessages | None = None  # the sampled topics' templates, made at the first step
+        self._messages: SampleMessages | None = None  # the sampled topics' templates, made with the first walk
         if self.source == "topic":
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
@@ -330,7 +330,11 @@ class SimulatorNode(Node):
         """One walk of ``orbit`` from its start, at simulated time ``iterations / rate`` after
         ``start_ns`` (ns); True if it ended (finished or fell, or could not start), False if
         it was stopped or reset."""
+        held = time.monotonic()
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"])
+        if walk.world is not None and self._messages is None:
+            self._messages = SampleMessages(walk.world.link_frames)
+        pacer.delay(time.monotonic() - held)  # the pacing starts with the walk's first sample
         offset = self.controls.iterations / self.rate  # s of simulated time before this walk
         base_ns = start_ns + round(offset * 1e9)  # the walk's t = 0
         if walk.world is not None and not self.controls.can_reset:  # the first walk: the latched topics
@@ -362,8 +366,6 @@ class SimulatorNode(Node):
     def _publish_step(self, step: StepSamples, base_ns: int, offset: float, pacer: Pacer) -> bool:
         """Publish (and record, and show) the samples of one step, each when the pacing releases
         it, with /clock first; False if stopped or reset before the last."""
-        if self._messages is None:
-            self._messages = SampleMessages(step.world.link_frames)
         first = step.samples[0]
         t = step.t
         stamps = base_ns + np.round(t * 1e9).astype(np.int64)
