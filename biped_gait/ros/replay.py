@@ -172,10 +172,10 @@ class ReplayNode(Node):
         self.bag, self.rate, self.loop = bag, rate, loop
         self.outputs = {topic: self.create_publisher(cls, topic, qos) for topic, (cls, qos) in outputs.items()}
         self.classes = {topic: cls for topic, (cls, _) in outputs.items()}
-        self._start: float | None = None  # monotonic time (s) of the first message's playback
+        self._began: float | None = None  # monotonic time (s) of the first message's playback
         self._span = 0  # ns between a pass's first message and the next pass's
         if clock_rate:
-            self._clock = self.create_publisher(Clock, topics.CLOCK, CLOCK)
+            self._clock_publisher = self.create_publisher(Clock, topics.CLOCK, CLOCK)
             self.create_timer(1.0 / clock_rate, self._publish_clock)
         if skipped:
             self.get_logger().warning(f"not replayed (message type not available here): {', '.join(skipped)}")
@@ -208,13 +208,13 @@ class ReplayNode(Node):
 
     def playback_ns(self) -> int:
         """The recording's time now playing (ns): its first message's until playback begins."""
-        if self._start is None:
+        if self._began is None:
             return self.bag.start_ns
-        return self.bag.start_ns + round((time.monotonic() - self._start) * self.rate * 1e9)
+        return self.bag.start_ns + round((time.monotonic() - self._began) * self.rate * 1e9)
 
     def _publish_clock(self) -> None:
         now = self.playback_ns()
-        self._clock.publish(Clock(clock=TimeMsg(sec=now // 1_000_000_000, nanosec=now % 1_000_000_000)))
+        self._clock_publisher.publish(Clock(clock=TimeMsg(sec=now // 1_000_000_000, nanosec=now % 1_000_000_000)))
 
     def _run(self) -> None:
         try:
@@ -240,9 +240,9 @@ class ReplayNode(Node):
         offset = index * self._span
         last, gap = None, 0
         for channel, message in self.bag.messages(list(self.outputs)):
-            if self._start is None:
-                self._start = time.monotonic()
-            due = self._start + (message.log_time - self.bag.start_ns + offset) * 1e-9 / self.rate
+            if self._began is None:
+                self._began = time.monotonic()
+            due = self._began + (message.log_time - self.bag.start_ns + offset) * 1e-9 / self.rate
             if self._stop.wait(max(0.0, due - time.monotonic())):
                 return False
             topic = channel.topic
