@@ -20,11 +20,13 @@ from foxglove.websocket import Capability, ServerListener
 
 from ..recording.schemas import schema_text
 
+DEFAULT_PORT = 8765  # Foxglove's default for a WebSocket connection
+
 
 class LiveView:
     """A Foxglove WebSocket server on ``host``:``port`` (0: any free port, see ``port``)."""
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 8765, name: str = "biped_gait") -> None:
+    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, name: str = "biped_gait") -> None:
         self._context = foxglove.Context()
         self._channels: dict[str, foxglove.Channel] = {}
         self._latched: dict[str, tuple[bytes, int]] = {}  # topic -> its latest message and stamp (ns)

@@ -63,7 +63,7 @@ from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import DEFAULT_CHUNK_SIZE, McapRecorder, RecordingError
 from .conversions import MODE_TO_MSG, orbit_from_msg
-from .live_view import LiveView
+from .live_view import DEFAULT_PORT, LiveView
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
@@ -100,7 +100,7 @@ PARAMETERS = (
           "discovery can take seconds)", 0, 100),
     Param("live_view", False, "serve a Foxglove WebSocket live view of the walk (true/false)"),
     Param("live_view_host", "127.0.0.1", "address the live view's server binds (host; 0.0.0.0: every interface)"),
-    Param("live_view_port", 8765, "port of the live view's server (TCP port; 0: any free one)", 0, 65535),
+    Param("live_view_port", DEFAULT_PORT, "port of the live view's server (TCP port; 0: any free one)", 0, 65535),
     Param("wait_timeout", 60.0, "how long to wait for the planner's service or action, a plan on the topic, or "
           "the subscribers (s); 0: no limit", 0.0, 86400.0),
 )
