@@ -1,9 +1,11 @@
 """Benchmark: the planner service's round trip from a client in another process, beside a bare
 rclpy service (std_srvs/Trigger, a node of a few lines spun by ``rclpy.spin``) measured in the
 same run: a cached request and uncached ones (each a different arm amplitude), with the planner
-recording and not, median and p99 over ``--calls`` calls each (``--uncached-calls`` for the
-uncached). Also the client's and the server's share of the plan's size: one PlanGait response
-serialized and deserialized by rclpy in this process, and the direct core call. Run:
+recording and not, the whole plan and the plan without its trajectory's points
+(``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
+(``--uncached-calls`` for the uncached). Also the client's and the server's share of the plan's
+size: one PlanGait response serialized and deserialized by rclpy in this process, and the
+direct core call. Run:
 
     .venv/bin/python benchmarks/bench_service.py [--calls 1000] [--uncached-calls 1000]
 """
@@ -32,6 +34,7 @@ from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.ros.client import ClientSide  # noqa: E402
 from biped_gait.ros.conversions import plan_msg  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
+from biped_gait.ros.planner_node import without_trajectory  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 
 TRIGGER = "/bench_bare_trigger"
@@ -71,11 +74,9 @@ def summary(times: list[float]) -> str:
     return f"median {1e3 * statistics.median(ordered):7.3f} ms, p99 {1e3 * p99:7.3f} ms ({len(times)} calls)"
 
 
-def conversion_ms(repeat: int = 200) -> tuple[float, float, int]:
-    """rclpy's serialization (server) and deserialization (client) of one PlanGait response (ms)
-    and its size (bytes)."""
-    gait = GaitPlanner().plan(GaitRequest(0.45, 0.45, ALPHA, "normal"))
-    response = PlanGait.Response(success=True, message="admissible", plan=plan_msg(gait, Header()))
+def conversion_ms(response: PlanGait.Response, repeat: int = 200) -> tuple[float, float, int]:
+    """rclpy's serialization (server) and deserialization (client) of ``response`` (ms) and its
+    size (bytes)."""
     data = serialize_message(response)
     start = time.perf_counter()
     for _ in range(repeat):
@@ -93,6 +94,7 @@ def main() -> None:
     parser.add_argument("--uncached-calls", type=int, default=1000)
     args = parser.parse_args()
     cached = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
+    compact = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
     results: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
@@ -114,7 +116,9 @@ def main() -> None:
             round_trips(side, bare, [Trigger.Request()] * 20)
             for name, client, request in [("bare Trigger service", bare, Trigger.Request()),
                                           ("cached, recording on", clients["true"], cached),
-                                          ("cached, recording off", clients["false"], cached)]:
+                                          ("cached, recording off", clients["false"], cached),
+                                          ("cached, no trajectory, recording on", clients["true"], compact),
+                                          ("cached, no trajectory, recording off", clients["false"], compact)]:
                 results[name] = round_trips(side, client, [request] * args.calls)
             for record in ("true", "false"):
                 alphas = [0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0) for k in range(args.uncached_calls)]
@@ -133,14 +137,18 @@ def main() -> None:
         start = time.perf_counter()
         planner.plan(GaitRequest(0.45, 0.45, 0.30 + 1e-4 * k, "normal"))
         solves.append(time.perf_counter() - start)
-    serialize, deserialize, size = conversion_ms()
+    plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header())
+    conversions = {"whole": conversion_ms(PlanGait.Response(success=True, message="admissible", plan=plan)),
+                   "without trajectory": conversion_ms(PlanGait.Response(success=True, message="admissible",
+                                                                         plan=without_trajectory(plan)))}
     bare = statistics.median(results["bare Trigger service"])
     print("planner service round trip from another process (Fast DDS, localhost), beside a bare Trigger service:")
     for name, times in results.items():
-        print(f"  {name:24s} {summary(times)}  ({statistics.median(times) / bare:5.2f} x the bare service)")
+        print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare:5.2f} x the bare service)")
     print(f"  direct core call GaitPlanner.plan (uncached): median {1e3 * statistics.median(solves):7.3f} ms")
-    print(f"  one PlanGait response ({size} bytes): rclpy serializes it in {serialize:.3f} ms (server), "
-          f"deserializes it in {deserialize:.3f} ms (client)")
+    for what, (serialize, deserialize, size) in conversions.items():
+        print(f"  one PlanGait response, {what} ({size} bytes): rclpy serializes it in {serialize:.3f} ms (server), "
+              f"deserializes it in {deserialize:.3f} ms (client)")
 
 
 if __name__ == "__main__":

@@ -277,3 +277,16 @@ def test_the_service_answers_while_an_optimization_runs(ros, action_client, defa
     assert not result_future.done(), "the optimization finished before the call: nothing was shown"
     print(f"\nplan_gait answered in {answered_in * 1000:.0f} ms while the optimization ran")
     ros.wait(result_future.done, 120.0)
+
+
+def test_a_plan_without_its_trajectory_is_the_same_plan(ros):
+    """omit_trajectory: the same answer but the trajectory's points, uncached and cached."""
+    request = plan_request(arm_amplitude=0.3712)
+    compact = ros.call(ros.client, plan_request(arm_amplitude=0.3712, omit_trajectory=True))
+    full = ros.call(ros.client, request)
+    again = ros.call(ros.client, plan_request(arm_amplitude=0.3712, omit_trajectory=True))
+    assert compact.success and full.success and again.message.endswith("(cached)")
+    assert compact.plan.trajectory.points == [] and again.plan.trajectory.points == [] and full.plan.trajectory.points
+    assert list(compact.plan.trajectory.joint_names) == list(full.plan.trajectory.joint_names)
+    for name in ("effort_cost", "theta", "q0", "qd_a", "joint_roles"):
+        assert np.array_equal(getattr(compact.plan, name), getattr(full.plan, name)), name

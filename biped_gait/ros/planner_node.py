@@ -18,22 +18,24 @@ deleted) is one error line and the node keeps serving without recording.
 
 from __future__ import annotations
 
+import copy
 import math
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
-from dataclasses import replace
-
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from std_msgs.msg import Header
+from trajectory_msgs.msg import JointTrajectory
 
 from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
@@ -71,6 +73,24 @@ PARAMETERS = (
 )
 
 
+@dataclass(frozen=True)
+class CachedAnswer:
+    """A plan_gait answer kept for identical requests: its success and message, the plan, and
+    the plan without its trajectory's points (for ``omit_trajectory``)."""
+
+    success: bool
+    message: str
+    plan: GaitPlan
+    compact: GaitPlan
+
+
+def without_trajectory(plan: GaitPlan) -> GaitPlan:
+    """``plan`` with its trajectory's joint names but none of its points."""
+    compact = copy.copy(plan)
+    compact.trajectory = JointTrajectory(header=plan.trajectory.header, joint_names=plan.trajectory.joint_names)
+    return compact
+
+
 class InFlight:
     """Counts the callbacks running (``with in_flight:``), so that closing can wait for them
     before the node's handles go away."""
@@ -104,7 +124,7 @@ class GaitPlannerNode(Node):
         self._default_params = value["default_params"]
         load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
-        self._cache: OrderedDict[tuple, PlanGait.Response] = OrderedDict()
+        self._cache: OrderedDict[tuple, CachedAnswer] = OrderedDict()
         self._cache_lock = threading.Lock()
         self._sequence = 0
         self._closing = threading.Event()
@@ -186,45 +206,54 @@ class GaitPlannerNode(Node):
             if cached is not None:
                 self._cache.move_to_end(key)
         if cached is not None:
-            response.success, response.plan = cached.success, cached.plan
+            response.success = cached.success
+            response.plan = cached.compact if request.omit_trajectory else cached.plan
             response.message = f"{cached.message} (cached)"
             return
         gait = self._planner(core_request.params, "service").plan(core_request)
-        response.plan = plan_msg(gait, self._header())
+        plan = plan_msg(gait, self._header())
         response.success = gait.admissible
         if gait.admissible:
             response.message = f"admissible (found by {gait.found})"
         else:
             reasons = "not admissible: " + "; ".join(gait.reasons)
             response.message = f"{reasons}; {gait.hint}" if gait.hint else reasons
+        answer = CachedAnswer(response.success, response.message, plan, without_trajectory(plan))
+        response.plan = answer.compact if request.omit_trajectory else plan
         with self._cache_lock:
-            self._cache[key] = PlanGait.Response(success=response.success, message=response.message, plan=response.plan)
+            self._cache[key] = answer
             while len(self._cache) > self.get_parameter("cache_size").value:
                 self._cache.popitem(last=False)
         if gait.admissible:
-            self._record(self.plan_publisher, response.plan)
+            self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
 
     def _record_call(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
-        """Record the exchange as a PlanGaitCall; a recording failure is logged, never raised."""
+        """Record the exchange as a PlanGaitCall, built and serialized on the recorder's thread
+        (off the request path); a recording failure is logged, never raised."""
         if self.recorder is None:
             return
         with self._cache_lock:
             self._sequence += 1
             sequence = self._sequence
-        fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
-        call = PlanGaitCall(header=self._header(), sequence=sequence, success=response.success,
-                            message=response.message, plan=response.plan, **fields)
-        self._record(self.call_recorder, call)
+        stamp = self.get_clock().now()
+        success, message, plan = response.success, response.message, response.plan
 
-    def _record(self, publisher: RecordedPublisher, msg) -> None:
-        """Publish (if live) and record ``msg``; a failure is logged (a recording failure once:
-        the recorder stops), never raised."""
+        def call() -> PlanGaitCall:
+            fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
+            return PlanGaitCall(header=Header(stamp=stamp.to_msg(), frame_id=PLAN_FRAME), sequence=sequence,
+                                success=success, message=message, plan=plan, **fields)
+
+        self._record(lambda: self.call_recorder.record_later(call, stamp.nanoseconds), self.call_recorder.topic)
+
+    def _record(self, action: Callable[[], None], topic: str) -> None:
+        """Publish or record (``action``); a failure is logged (a recording failure once: the
+        recorder stops), never raised."""
         try:
-            publisher.publish(msg)
+            action()
         except RecordingError as exc:
             self.get_logger().error(f"{exc}; serving without recording")
         except Exception as exc:  # noqa: BLE001  the answer matters more than its record
-            self.get_logger().error(f"publishing or recording on {publisher.topic} failed: {clip(repr(exc))}")
+            self.get_logger().error(f"publishing or recording on {topic} failed: {clip(repr(exc))}")
 
     def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
         with self._in_flight:

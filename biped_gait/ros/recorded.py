@@ -5,7 +5,7 @@ A recorded-only message is serialized on the recorder's writer thread, off the c
 
 from __future__ import annotations
 
-from functools import partial
+from collections.abc import Callable
 
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -35,10 +35,15 @@ class RecordedPublisher:
     def publish(self, msg, stamp_ns: int | None = None) -> None:
         """Publish ``msg`` and record it at ``stamp_ns`` (ns; default: now)."""
         if self.publisher is None and self.live is None:
-            if self.recorder is not None:
-                self.recorder.write(self.topic, partial(serialize_message, msg), stamp_ns)
+            self.record_later(lambda: msg, stamp_ns)
             return
         self.publish_serialized(serialize_message(msg), stamp_ns)
+
+    def record_later(self, make: Callable[[], object], stamp_ns: int | None = None) -> None:
+        """Record the message ``make()`` returns, built and serialized on the recorder's writer
+        thread (for a recorded-only topic), at ``stamp_ns`` (ns; default: now)."""
+        if self.recorder is not None:
+            self.recorder.write(self.topic, lambda: serialize_message(make()), stamp_ns)
 
     def publish_serialized(self, data: bytes, stamp_ns: int | None = None) -> None:
         """Publish, record and show the CDR bytes ``data`` of one message, stamped ``stamp_ns``

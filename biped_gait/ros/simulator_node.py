@@ -221,8 +221,9 @@ class SimulatorNode(Node):
                 raise NoPlan(f"arm-swing optimization failed: {result.message}")
             alpha = result.alpha_opt
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
+        # the walk needs the plan's boundary states, not its sampled trajectory
         request = PlanGait.Request(step_length=value["step_length"], period=value["period"], arm_amplitude=alpha,
-                                   mode=mode, params=value["params"])
+                                   mode=mode, params=value["params"], omit_trajectory=True)
         response = self._call_plan(request)
         if not response.success:
             raise NoPlan(f"the planner refused: {response.message}")
