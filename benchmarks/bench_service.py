@@ -1,6 +1,7 @@
 """Benchmark: the planner service's round trip from a client in another process, beside a bare
 rclpy service (std_srvs/Trigger, a node of a few lines spun by ``rclpy.spin``) measured in the
-same run: a cached request and uncached ones (each a different arm amplitude), with the planner
+same run, one call of each in turn: a cached request and uncached ones (each a different arm
+amplitude), with the planner
 recording and not, the whole plan and the plan without its trajectory's points
 (``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
 (``--uncached-calls`` for the uncached). Also the client's and the server's share of the plan's
@@ -57,14 +58,22 @@ def trigger_server() -> None:
         pass
 
 
-def round_trips(side: ClientSide, client, requests) -> list[float]:
-    """Round-trip times (s) of ``requests``, one after the other."""
-    times = []
-    for request in requests:
-        start = time.perf_counter()
-        response = side.call(client, request, timeout=60.0)
-        times.append(time.perf_counter() - start)
-        assert getattr(response, "success", True), response.message
+def round_trip(side: ClientSide, client, request) -> float:
+    """The round-trip time (s) of one call."""
+    start = time.perf_counter()
+    response = side.call(client, request, timeout=60.0)
+    took = time.perf_counter() - start
+    assert getattr(response, "success", True), response.message
+    return took
+
+
+def interleaved(side: ClientSide, targets: dict[str, tuple], calls: int) -> dict[str, list[float]]:
+    """Round-trip times (s) of ``calls`` calls of each target (name -> (client, request)), one
+    of each in turn, so that a change of the machine's load falls on all alike."""
+    times: dict[str, list[float]] = {name: [] for name in targets}
+    for _ in range(calls):
+        for name, (client, request) in targets.items():
+            times[name].append(round_trip(side, client, request))
     return times
 
 
@@ -112,19 +121,19 @@ def main() -> None:
                        for record in planners}
             for client in clients.values():
                 side.connect(client)
-                round_trips(side, client, [cached] * 20)  # solved once, then cached; warm-up
-            round_trips(side, bare, [Trigger.Request()] * 20)
-            for name, client, request in [("bare Trigger service", bare, Trigger.Request()),
-                                          ("cached, recording on", clients["true"], cached),
-                                          ("cached, recording off", clients["false"], cached),
-                                          ("cached, no trajectory, recording on", clients["true"], compact),
-                                          ("cached, no trajectory, recording off", clients["false"], compact)]:
-                results[name] = round_trips(side, client, [request] * args.calls)
-            for record in ("true", "false"):
-                alphas = [0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0) for k in range(args.uncached_calls)]
-                requests = [PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=a) for a in alphas]
-                results[f"uncached, recording {'on' if record == 'true' else 'off'}"] = round_trips(
-                    side, clients[record], requests)
+            targets = {"bare Trigger service": (bare, Trigger.Request()),
+                       "cached, recording on": (clients["true"], cached),
+                       "cached, recording off": (clients["false"], cached),
+                       "cached, no trajectory, recording on": (clients["true"], compact),
+                       "cached, no trajectory, recording off": (clients["false"], compact)}
+            interleaved(side, targets, 20)  # solved once, then cached; warm-up
+            results.update(interleaved(side, targets, args.calls))
+            for k in range(args.uncached_calls):
+                for record in ("true", "false"):
+                    alpha = 0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0)
+                    name = f"uncached, recording {'on' if record == 'true' else 'off'}"
+                    results.setdefault(name, []).append(round_trip(
+                        side, clients[record], PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
         finally:
             side.close()
             for proc in planners.values():
