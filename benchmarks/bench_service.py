@@ -1,6 +1,7 @@
 """Benchmark: the planner service's round trip from a client in another process, beside a bare
 rclpy service (std_srvs/Trigger, a node of a few lines spun by ``rclpy.spin``) measured in the
-same run, one call of each in turn: a cached request and uncached ones (each a different arm
+same run, one call of each in turn (and the bare service and the cached plans also each alone,
+back to back): a cached request and uncached ones (each a different arm
 amplitude), with the planner
 recording and not, the whole plan and the plan without its trajectory's points
 (``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
@@ -105,6 +106,7 @@ def main() -> None:
     cached = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
     compact = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
     results: dict[str, list[float]] = {}
+    alone: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
         trigger = subprocess.Popen([sys.executable, __file__, "--trigger-server"], stdout=subprocess.DEVNULL,
@@ -128,6 +130,8 @@ def main() -> None:
                        "cached, no trajectory, recording off": (clients["false"], compact)}
             interleaved(side, targets, 20)  # solved once, then cached; warm-up
             results.update(interleaved(side, targets, args.calls))
+            alone = {name: [round_trip(side, *targets[name]) for _ in range(args.calls)]
+                     for name in ("bare Trigger service", "cached, recording on", "cached, no trajectory, recording on")}
             for k in range(args.uncached_calls):
                 for record in ("true", "false"):
                     alpha = 0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0)
@@ -154,6 +158,10 @@ def main() -> None:
     print("planner service round trip from another process (Fast DDS, localhost), beside a bare Trigger service:")
     for name, times in results.items():
         print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare:5.2f} x the bare service)")
+    print("each alone, back to back (each server busy with one client, no other call between):")
+    bare_alone = statistics.median(alone["bare Trigger service"])
+    for name, times in alone.items():
+        print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare_alone:5.2f} x the bare service)")
     print(f"  direct core call GaitPlanner.plan (uncached): median {1e3 * statistics.median(solves):7.3f} ms")
     for what, (serialize, deserialize, size) in conversions.items():
         print(f"  one PlanGait response, {what} ({size} bytes): rclpy serializes it in {serialize:.3f} ms (server), "

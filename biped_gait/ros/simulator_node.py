@@ -369,22 +369,22 @@ class SimulatorNode(Node):
         it, with /clock first; False if stopped or reset before the last."""
         first = step.samples[0]
         t = step.t
-        stamps = base_ns + np.round(t * 1e9).astype(np.int64)
-        rows = self._messages.encode(step.world, stamps, first.step, first.stance_side)
-        outputs = [(self.sampled[topic], encoded) for topic, encoded in rows.items()]
-        clock = self.clock.encode(stamps)
-        controls, stop, live = self.controls, self._stop, self.live
-        for k in range(len(t)):
+        stamps_ns = base_ns + np.round(t * 1e9).astype(np.int64)
+        rows = self._messages.encode(step.world, stamps_ns, first.step, first.stance_side)
+        outputs = [(self.sampled[topic].publish_serialized, [row.tobytes() for row in encoded])
+                   for topic, encoded in rows.items()]
+        clock = [row.tobytes() for row in self.clock.encode(stamps_ns)]
+        controls, stop, live, context = self.controls, self._stop, self.live, self.context
+        for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
             if controls.paused:
                 held = time.monotonic()
                 controls.hold(stop)
                 pacer.delay(time.monotonic() - held)
-            if controls.reset_requested() or not pacer.wait(offset + t[k], stop) or not self.context.ok():
+            if controls.reset_requested() or not pacer.wait(due, stop) or not context.ok():
                 return False
-            stamp = int(stamps[k])
-            self.clock.publish(clock[k].tobytes())
-            for publisher, encoded in outputs:
-                publisher.publish_serialized(encoded[k].tobytes(), stamp)
+            self.clock.publish(clock[k])
+            for publish, data in outputs:
+                publish(data[k], stamp)
             if live is not None:
                 live.time(stamp)
             controls.iterations += 1
