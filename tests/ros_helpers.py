@@ -18,6 +18,16 @@ def start_node(entry: str, *ros_args: str, cwd: Path) -> subprocess.Popen:
     return start_entry(entry, list(ros_args), log=cwd / f"{entry}.log", cwd=cwd)
 
 
+def start_simulator(where: Path, planner: str, *params: str) -> subprocess.Popen:
+    """A simulator asking the planner node named ``planner``, recording under ``where/bags``,
+    with the parameters ``params`` ('name:=value'), logging to ``where``."""
+    args = ["-p", f"plan_service:=/{planner}/plan_gait", "-p", f"optimize_action:=/{planner}/optimize_arm_swing",
+            "-p", f"record_dir:={where / 'bags'}"]
+    for p in params:
+        args += ["-p", p]
+    return start_node("biped-gait-simulator", *args, cwd=where)
+
+
 def stop_node(proc: subprocess.Popen, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:
     """Send ``sig`` (default SIGTERM) and wait; returns the exit status (killed if it hangs)."""
     return stop_process(proc, sig, timeout)

@@ -37,7 +37,7 @@ from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 from biped_gait_interfaces.srv import PlanGait
 
-from .ros_helpers import start_node, stop_node
+from .ros_helpers import start_node, start_simulator, stop_node
 from .test_replay import same_messages
 
 pytestmark = pytest.mark.ros
@@ -51,11 +51,7 @@ def ns(stamp) -> int:
 
 
 def simulator(where: Path, *params: str):
-    args = ["-p", f"plan_service:=/{PLANNER}/plan_gait", "-p", f"optimize_action:=/{PLANNER}/optimize_arm_swing",
-            "-p", f"record_dir:={where / 'bags'}"]
-    for p in params:
-        args += ["-p", p]
-    return start_node("biped-gait-simulator", *args, cwd=where)
+    return start_simulator(where, PLANNER, *params)
 
 
 @pytest.fixture(scope="module")

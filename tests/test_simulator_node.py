@@ -24,7 +24,7 @@ from biped_gait.core.urdf import PHYSICAL_JOINTS
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from .ros_helpers import read_bag, start_node, stop_node
+from .ros_helpers import read_bag, start_node, start_simulator, stop_node
 
 pytestmark = pytest.mark.ros
 
@@ -39,12 +39,8 @@ def planner_node(tmp_path_factory):
     assert stop_node(proc) == 0
 
 
-def simulator(where: Path, *params: str) -> subprocess.Popen:
-    args = ["-p", f"plan_service:=/{PLANNER}/plan_gait", "-p", f"optimize_action:=/{PLANNER}/optimize_arm_swing",
-            "-p", f"record_dir:={where / 'bags'}"]
-    for p in params:
-        args += ["-p", p]
-    return start_node("biped-gait-simulator", *args, cwd=where)
+def simulator(where: Path, *params: str):
+    return start_simulator(where, PLANNER, *params)
 
 
 @pytest.fixture(scope="module")

@@ -117,26 +117,29 @@ class McapRecorder:
 
     def write_many(self, messages: list[tuple[str, bytes, int]]) -> None:
         """Record ``messages`` (topic, CDR bytes, stamp in ns since the epoch), in this order,
-        then hand what chunks they closed to the file; as ``write`` otherwise."""
+        each chunk they close handed to the file at once; as ``write`` otherwise."""
         with self._lock:
             if self.closed or not messages:
                 return
-            add, channels = self._writer.add_message, self._channels
+            add, channels, sink = self._writer.add_message, self._channels, self._sink
             for topic, data, stamp in messages:
                 entry = channels[topic]
                 add(entry.id, log_time=stamp, data=data, publish_time=stamp, sequence=entry.record.count)
                 entry.record.count += 1
-            stamps = [stamp for _, _, stamp in messages]
-            low, high = min(stamps), max(stamps)
-            self._first = low if self._first is None else min(self._first, low)
-            self._last = high if self._last is None else max(self._last, high)
-            written = self._sink.written
-            try:
-                self._sink.flush()  # the chunks closed reach the disk now
-            except OSError as exc:
-                self._fail(_reason(exc))
-            if self._sink.written != written and self._sink.deleted:
-                self._fail(f"{self.bag_dir} was deleted while recording")
+                self._first = stamp if self._first is None or stamp < self._first else self._first
+                self._last = stamp if self._last is None or stamp > self._last else self._last
+                if sink.pending:
+                    self._flush()
+
+    def _flush(self) -> None:
+        """Hand the closed chunk to the file; ``_fail`` if the file refuses or was deleted."""
+        written = self._sink.written
+        try:
+            self._sink.flush()
+        except OSError as exc:
+            self._fail(_reason(exc))
+        if self._sink.written != written and self._sink.deleted:
+            self._fail(f"{self.bag_dir} was deleted while recording")
 
     def _fail(self, reason: str) -> None:
         """Stop recording: free the reserve, finish the file as far as it got, and raise."""

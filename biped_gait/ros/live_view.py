@@ -8,15 +8,13 @@ on that topic) moving with ``/tf`` and ``/tf_static``, and plots ``/joint_states
 Latched topics (transient-local: the robot description, the static transforms) are sent again
 to each client that subscribes to them, as a late ROS subscriber would get them. The server
 binds ``127.0.0.1`` unless told otherwise; it runs on threads of its own (Rust), and logging a
-message to a channel nobody subscribes to costs next to nothing.
+message to a channel nobody subscribes to costs next to nothing. The SDK is imported when a live
+view starts: the nodes that show nothing do not load it (nor its runtime's exit hook).
 """
 
 from __future__ import annotations
 
 import time
-
-import foxglove
-from foxglove.websocket import Capability, ServerListener
 
 from ..recording.schemas import schema_text
 
@@ -27,11 +25,15 @@ class LiveView:
     """A Foxglove WebSocket server on ``host``:``port`` (0: any free port, see ``port``)."""
 
     def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, name: str = "biped_gait") -> None:
+        import foxglove
+        from foxglove.websocket import Capability
+
+        self._foxglove = foxglove
         self._context = foxglove.Context()
-        self._channels: dict[str, foxglove.Channel] = {}
+        self._channels: dict[str, object] = {}  # topic -> its foxglove.Channel
         self._latched: dict[str, tuple[bytes, int]] = {}  # topic -> its latest message and stamp (ns)
         self.server = foxglove.start_server(name=name, host=host, port=port, context=self._context,
-                                            capabilities=[Capability.Time], server_listener=_Listener(self))
+                                            capabilities=[Capability.Time], server_listener=_listener(self))
 
     @property
     def port(self) -> int:
@@ -43,6 +45,7 @@ class LiveView:
         latest message to each new subscriber."""
         if topic in self._channels:
             return
+        foxglove = self._foxglove
         schema = foxglove.Schema(name=datatype, encoding="ros2msg", data=schema_text(datatype).encode())
         self._channels[topic] = foxglove.Channel(topic, schema=schema, message_encoding="cdr", context=self._context)
         if latched:
@@ -71,11 +74,12 @@ class LiveView:
         self.server.stop()
 
 
-class _Listener(ServerListener):
+def _listener(view: LiveView):
     """The server's callbacks: a client's subscription to a latched topic gets its latest message."""
+    from foxglove.websocket import ServerListener
 
-    def __init__(self, view: LiveView) -> None:
-        self._view = view
+    class Listener(ServerListener):
+        def on_subscribe(self, _client, channel) -> None:
+            view.resend_latched(channel.topic)
 
-    def on_subscribe(self, _client, channel) -> None:
-        self._view.resend_latched(channel.topic)
+    return Listener()

@@ -6,6 +6,7 @@ A recorded-only message is serialized on the recorder's writer thread, off the c
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -13,8 +14,10 @@ from rclpy.serialization import serialize_message
 
 from ..recording.background import BackgroundRecorder
 from ..recording.schemas import type_name
-from .live_view import LiveView
 from .qos import describe
+
+if TYPE_CHECKING:  # the live view's SDK is loaded only where a live view runs
+    from .live_view import LiveView
 
 
 class RecordedPublisher:
@@ -22,7 +25,7 @@ class RecordedPublisher:
     messages ``recorder`` (if any) records and ``live`` (if any) shows."""
 
     def __init__(self, node: Node, msg_type: type, topic: str, qos: QoSProfile, recorder: BackgroundRecorder | None,
-                 publish: bool = True, live: LiveView | None = None) -> None:
+                 publish: bool = True, live: "LiveView | None" = None) -> None:
         self.publisher = node.create_publisher(msg_type, topic, qos) if publish else None
         self.topic = self.publisher.topic_name if publish else node.resolve_topic_name(topic)
         self.recorder = recorder
