@@ -43,6 +43,7 @@ class SimControls:
 
     @property
     def paused(self) -> bool:
+        """True while a pause holds the walk."""
         return not self._running.is_set()
 
     def _on_pause(self, _request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
@@ -81,6 +82,7 @@ class SimControls:
         return True
 
     def reset_requested(self) -> bool:
+        """True if a reset was asked for and not yet taken."""
         return self._reset.is_set()
 
     def take_reset(self) -> bool:
