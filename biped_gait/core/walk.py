@@ -346,7 +346,8 @@ class Walk:
     Iterating yields, in time order: ``Sample`` (every 1 / ``rate`` s of simulated time, with
     the robot in world terms), ``Touchdown`` at the end of each step, and at the end one of
     ``Finished`` (``steps`` steps made; 0 means never), ``Fell``, or ``CouldNotStart`` (then
-    nothing else). ``batches`` yields the same with each step's samples at once, as arrays. ``model`` and ``world`` (None if it could not start) describe the robot.
+    nothing else). ``batches`` yields the same with each step's samples at once, as arrays.
+    ``model`` and ``world`` (None if it could not start) describe the robot.
     """
 
     def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,

@@ -8,10 +8,10 @@ planner's ``optimize_arm_swing`` action for the optimal amplitude first).
 
 Topics (stamps are the walk's simulated time, started at the node's clock: the wall clock, or
 with ``use_sim_time`` the simulated time, from 0): ``/clock`` (rosgraph_msgs/Clock, that time,
-before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, URDF joint names), ``/odom`` (nav_msgs/Odometry,
-pelvis ``base_link`` in ``world``), ``/angular_momentum`` (biped_gait_interfaces/AngularMomentum),
-``/gait_events`` (biped_gait_interfaces/GaitEvent), ``/tf`` (the URDF's moving joints and the
-pelvis in ``world``), and transient-local ``/robot_description`` (std_msgs/String) and
+before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, URDF joint
+names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
+(biped_gait_interfaces/AngularMomentum), ``/gait_events`` (biped_gait_interfaces/GaitEvent),
+``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local ``/robot_description`` (std_msgs/String) and
 ``/tf_static``. The recording (MCAP, rosbag2 directory under ``record_dir``, written by a
 thread of its own) holds the same bytes as were published, and so does the optional Foxglove
 live view (``live_view``). Each step's samples come from the walk as arrays and their messages
@@ -139,8 +139,10 @@ class SimulatorNode(Node):
             except RecordingError as exc:
                 self._recording_failure = str(exc)
         self.live = self._start_live_view() if value["live_view"] else None
-        publisher = lambda msg_type, topic, qos: RecordedPublisher(self, msg_type, topic, qos, self.recorder,  # noqa: E731
-                                                                   live=self.live)
+
+        def publisher(msg_type: type, topic: str, qos) -> RecordedPublisher:
+            return RecordedPublisher(self, msg_type, topic, qos, self.recorder, live=self.live)
+
         self.pub_joints = publisher(JointState, topics.JOINT_STATES, STREAM)
         self.pub_odom = publisher(Odometry, topics.ODOM, STREAM)
         self.pub_momentum = publisher(AngularMomentum, topics.ANGULAR_MOMENTUM, STREAM)
