@@ -3,9 +3,10 @@
 published and recorded, and with recording off; beside it, in the same run, the walker alone
 (integration, events, double supports, samples: no world view, no ROS), the walker with the
 world view and the messages serialized (no ROS), the cold gait solve (the machine's yardstick)
-and the cost of one message each way. Run:
+and the cost of one message each way. Each real-time factor is the median of ``--repeat`` runs
+(their range beside it): the machine is shared, and a run's figure moves with the load. Run:
 
-    .venv/bin/python benchmarks/bench_simulator.py [--steps N]
+    .venv/bin/python benchmarks/bench_simulator.py [--steps N] [--repeat N]
 """
 
 from __future__ import annotations
@@ -118,8 +119,13 @@ def message_costs(tmp: Path) -> dict[str, float]:
     return costs
 
 
-def node_factor(where: Path, steps: int, record: bool) -> tuple[float, str]:
-    """The simulator node's real-time factor and wall time (from its log), against a planner."""
+def factors(values: list[float]) -> str:
+    return f"{statistics.median(values):6.2f} [{min(values):.2f}, {max(values):.2f}]"
+
+
+def node_factor(where: Path, steps: int, record: bool) -> float:
+    """The simulator node's real-time factor (from its log), against a planner."""
+    where.mkdir(exist_ok=True)
     tag = "on" if record else "off"
     planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / f"planner_{tag}.log", cwd=where)
     try:
@@ -133,29 +139,35 @@ def node_factor(where: Path, steps: int, record: bool) -> tuple[float, str]:
     log = (where / f"simulator_{tag}.log").read_text()
     match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
     assert match, log
-    return float(match.group(2)), match.group(1)
+    return float(match.group(2))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     planner = GaitPlanner()
     cold = cold_solve_ms(planner)
-    walker_rtf, encoded_rtf = core_factors(planner, args.steps)
+    walker, encoded, recorded, unrecorded = [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
-        recorded, recorded_wall = node_factor(where, args.steps, record=True)
-        unrecorded, unrecorded_wall = node_factor(where, args.steps, record=False)
+        for run in range(args.repeat):  # interleaved, so that a change of load falls on all alike
+            walker_rtf, encoded_rtf = core_factors(planner, args.steps)
+            walker.append(walker_rtf)
+            encoded.append(encoded_rtf)
+            recorded.append(node_factor(where / f"run{run}", args.steps, record=True))
+            unrecorded.append(node_factor(where / f"run{run}", args.steps, record=False))
         costs = message_costs(where)
     simulated = args.steps * REQUEST.period
-    print(f"simulator at {RATE:g} Hz, {args.steps} steps ({simulated:.2f} s simulated), as fast as possible; "
-          f"cold gait solve on this machine: {cold:.1f} ms (median)")
-    print(f"  node, every topic published and recorded: real-time factor {recorded:6.2f} ({recorded_wall} s wall)")
-    print(f"  node, published, recording off:           real-time factor {unrecorded:6.2f} ({unrecorded_wall} s wall)")
-    print(f"  walker alone (no world view, no ROS):     real-time factor {walker_rtf:6.2f}; "
-          f"node with recording / walker alone = {recorded / walker_rtf:.2f}")
-    print(f"  walker + world view + messages serialized (no ROS): real-time factor {encoded_rtf:6.2f}")
+    median = statistics.median
+    print(f"simulator at {RATE:g} Hz, {args.steps} steps ({simulated:.2f} s simulated), as fast as possible, "
+          f"median of {args.repeat} runs [range]; cold gait solve on this machine: {cold:.1f} ms (median)")
+    print(f"  node, every topic published and recorded: real-time factor {factors(recorded)}")
+    print(f"  node, published, recording off:           real-time factor {factors(unrecorded)}")
+    print(f"  walker alone (no world view, no ROS):     real-time factor {factors(walker)}; "
+          f"node with recording / walker alone = {median(recorded) / median(walker):.2f}")
+    print(f"  walker + world view + messages serialized (no ROS): real-time factor {factors(encoded)}")
     print(f"  (samples evaluated {'in the compiled twin' if NativeSamples is not None else 'by the Python loops'})")
     print("per message (us):")
     for what, cost in costs.items():

@@ -17,6 +17,7 @@ import yaml
 
 from biped_gait.recording.background import BackgroundRecorder
 from biped_gait.recording.qos import qos_description
+from biped_gait.recording.recorder_process import RecorderProcess
 from biped_gait.recording.reader import open_bag
 from biped_gait.recording.recover import is_complete, recover
 from biped_gait.recording.writer import RESERVE_NAME, McapRecorder, RecordingError
@@ -163,3 +164,32 @@ def test_the_background_recorder_serializes_off_the_callers_path_and_drains_at_c
     info = yaml.safe_load((recorder.bag_dir / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     [entry] = info["topics_with_message_count"]
     assert entry["topic_metadata"]["type_description_hash"].startswith("RIHS01_")
+
+
+def test_the_recorder_process_says_what_the_recorder_says(tmp_path):
+    """A recorder in a process of its own: the same one-line failures, raised in the caller,
+    and a file that readers open once closed."""
+    (tmp_path / "a_file").write_text("")
+    with pytest.raises(RecordingError, match=r"^recording failed: cannot create .*a_file/bags/bag: Not a directory$"):
+        RecorderProcess(tmp_path / "a_file" / "bags", "bag")
+    recorder = BackgroundRecorder(RecorderProcess(tmp_path, "bag", chunk_size=1024))
+    with pytest.raises(FileExistsError):
+        RecorderProcess(tmp_path, "bag")
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+    for i in range(500):
+        recorder.write("/joint_states", joint_state(i), i)
+    recorder.close()
+    assert open_bag(recorder.bag_dir).topics() == {"/joint_states": (JOINTS, 500)}
+    deleted = BackgroundRecorder(RecorderProcess(tmp_path, "deleted", chunk_size=1024))
+    deleted.add_topic("/joint_states", JOINTS, [STREAM])
+    shutil.rmtree(deleted.bag_dir)
+    errors = []
+    for i in range(3000):
+        try:
+            deleted.write("/joint_states", joint_state(i), i)
+        except RecordingError as exc:
+            errors.append(str(exc))
+        if i % 500 == 499:
+            time.sleep(0.05)
+    deleted.close()
+    assert len(errors) == 1 and "was deleted while recording" in errors[0]

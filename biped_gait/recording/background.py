@@ -1,6 +1,7 @@
 """Recording off the caller's path: messages are queued and a writer thread of the recorder's own
 hands them to the ``McapRecorder`` in batches, so that a simulation step or a service answer
-never waits for encoding or the disk.
+never waits for encoding or the disk. The recorder may run in a process of its own
+(``RecorderProcess``: the simulator's, whose thread keeps the interpreter busy).
 
 A queued message is CDR bytes, or a function giving them, called on the writer thread (a
 service's exchange is serialized there, after the answer has gone). Stamps are taken when a
@@ -19,6 +20,7 @@ import time
 from collections import deque
 from collections.abc import Callable
 
+from .recorder_process import RecorderProcess
 from .writer import McapRecorder, RecordingError
 
 Payload = bytes | Callable[[], bytes]
@@ -30,7 +32,7 @@ class BackgroundRecorder:
     """Queues messages for ``recorder`` and writes them from a thread of its own; ``add_topic``
     goes straight to the recorder. ``close`` writes what is queued, then finalizes the file."""
 
-    def __init__(self, recorder: McapRecorder, max_pending: int = MAX_PENDING) -> None:
+    def __init__(self, recorder: McapRecorder | RecorderProcess, max_pending: int = MAX_PENDING) -> None:
         self.recorder = recorder
         self.bag_dir, self.path = recorder.bag_dir, recorder.path
         self._queue: deque[tuple[str, Payload, int]] = deque()

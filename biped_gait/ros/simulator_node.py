@@ -12,8 +12,8 @@ before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, U
 names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
 (biped_gait_interfaces/AngularMomentum), ``/gait_events`` (biped_gait_interfaces/GaitEvent),
 ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local ``/robot_description`` (std_msgs/String) and
-``/tf_static``. The recording (MCAP, rosbag2 directory under ``record_dir``, written by a
-thread of its own) holds the same bytes as were published, and so does the optional Foxglove
+``/tf_static``. The recording (MCAP, rosbag2 directory under ``record_dir``, handed over by a
+thread to a recorder process of its own) holds the same bytes as were published, and so does the optional Foxglove
 live view (``live_view``). Each step's samples come from the walk as arrays and their messages
 are serialized at once (``walk_messages``). Controls: ``~/pause``, ``~/resume``, ``~/reset`` and
 the step counter ``~/iterations`` (``sim_controls``).
@@ -61,7 +61,8 @@ from ..core.text import clip
 from ..core.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
-from ..recording.writer import DEFAULT_CHUNK_SIZE, McapRecorder, RecordingError
+from ..recording.recorder_process import RecorderProcess
+from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError
 from .conversions import MODE_TO_MSG, orbit_from_msg
 from .live_view import DEFAULT_PORT, LiveView
 from .parameters import Param, declare
@@ -134,7 +135,7 @@ class SimulatorNode(Node):
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
             try:
                 self.recorder = BackgroundRecorder(
-                    McapRecorder(value["record_dir"], f"walk_{stamp}", chunk_size=value["chunk_size"]))
+                    RecorderProcess(value["record_dir"], f"walk_{stamp}", chunk_size=value["chunk_size"]))
                 self.get_logger().info(f"recording to {self.recorder.bag_dir}")
             except RecordingError as exc:
                 self._recording_failure = str(exc)
