@@ -5,7 +5,10 @@ The spin is ``spin_once`` with a short timeout in a loop that checks a stop flag
 module's own SIGINT/SIGTERM handlers (rclpy's are not installed): a plain ``spin`` can stay
 in ``rcl_wait`` after a signal. Stopping takes at most ``SPIN_PERIOD`` plus the node's
 ``close``; callbacks still running then (a solve in flight) are not waited for beyond
-``GRACE`` s: the process ends without them, its recording already finished.
+``GRACE`` s. The process then ends at once (``os._exit``, output flushed), its recording
+finished and rclpy shut down: the interpreter's and the middleware's teardown after that (a
+second and more on a loaded machine: the middleware's exit handlers) would only delay the stop
+(Fast DDS clears a dead process's shared-memory files when the next participant starts).
 
 Bad input never starts the node: ``--help`` prints the parameters; unknown arguments, a ROS
 parameters file that is not a readable, small, well-formed YAML file, an argument rcl cannot
@@ -135,9 +138,8 @@ def _close(node: Node, program: str) -> None:
         rclpy.logging.get_logger(program).error(str(exc))
 
 
-def _end_threads(executor: MultiThreadedExecutor | None) -> bool:
-    """Let the executor's idle threads end and wait up to ``GRACE`` s for busy ones; False
-    if a callback still runs."""
+def _end_threads(executor: MultiThreadedExecutor | None) -> None:
+    """Let the executor's idle threads end and wait up to ``GRACE`` s for busy ones."""
     pool = getattr(executor, "_executor", None)  # rclpy's ThreadPoolExecutor (no public handle)
     if pool is not None:
         pool.shutdown(wait=False, cancel_futures=True)
@@ -145,7 +147,6 @@ def _end_threads(executor: MultiThreadedExecutor | None) -> bool:
     for thread in threading.enumerate():
         if thread is not threading.main_thread() and not thread.daemon:
             thread.join(max(0.0, deadline - time.monotonic()))
-    return not any(t.is_alive() and not t.daemon for t in threading.enumerate() if t is not threading.main_thread())
 
 
 def run_node(make_node: Callable[[], Node], program: str, threads: int = 4, args: list[str] | None = None,
@@ -154,7 +155,8 @@ def run_node(make_node: Callable[[], Node], program: str, threads: int = 4, args
     answers ``--help``), create the node with ``make_node`` and spin it; returns the exit
     status: 2 for bad input, else the node's ``exit_status`` (0 if it has none). A node may
     have ``exit_requested`` (a ``threading.Event``) to end the spin, and must have ``close()``.
-    If a callback still runs after the node is closed, the process ends here (``os._exit``)."""
+    Once rclpy has started, the process ends here (``os._exit`` with that status, see the
+    module): call it from an entry point, not from a process that goes on."""
     argv = list(sys.argv if args is None else args)
     status = check_command_line(program, argv, usage)
     if status is not None:
@@ -176,11 +178,10 @@ def run_node(make_node: Callable[[], Node], program: str, threads: int = 4, args
             status = status if status is not None else getattr(node, "exit_status", 0)
         if executor is not None:
             executor.shutdown(timeout_sec=0)
+            _end_threads(executor)  # before the node's handles go: a callback ending now still has them
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-    if not _end_threads(executor):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(status)
-    return status
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)
