@@ -377,13 +377,15 @@ class SimulatorNode(Node):
         outputs = [(self.sampled[topic].publish_serialized, [row.tobytes() for row in encoded])
                    for topic, encoded in rows.items()]
         clock = [row.tobytes() for row in self.clock.encode(stamps_ns)]
-        controls, stop, live, context = self.controls, self._stop, self.live, self.context
+        controls, stop, live, paced = self.controls, self._stop, self.live, pacer.factor > 0
+        if not self.context.ok():  # shut down under us: a stop (the stop flag says so at each sample)
+            return False
         for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
             if controls.paused:
                 held = time.monotonic()
                 controls.hold(stop)
                 pacer.delay(time.monotonic() - held)
-            if controls.reset_requested() or not pacer.wait(due, stop) or not context.ok():
+            if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
                 return False
             self.clock.publish(clock[k])
             for publish, data in outputs:
