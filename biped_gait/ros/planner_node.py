@@ -146,6 +146,9 @@ class GaitPlannerNode(Node):
         # owns its planners (Pinocchio data are not shared between threads).
         self._service_group = MutuallyExclusiveCallbackGroup()
         self._action_group = MutuallyExclusiveCallbackGroup()
+        # The service's callbacks run in the spinning thread (a cached answer at once; a solve,
+        # tens of ms, there too), the action's on the executor's pool.
+        self.inline_callback_groups = (self._service_group,)
         queue = QoSProfile(depth=value["queue_depth"])  # reliable, volatile, like the services' default
         self.plan_service = self.create_service(
             PlanGait, "~/plan_gait", self._on_plan_gait, qos_profile=queue, callback_group=self._service_group
