@@ -35,17 +35,18 @@ class RecorderProcess:
             pass_fds=(theirs.fileno(),), stdin=subprocess.DEVNULL)
         theirs.close()
         self._conn = Connection(ours.detach())
+        self.bag_dir = Path(directory) / name
         self._lock = threading.Lock()
         self.failure = ""
         self.closed = False  # after close or a failure: calls do nothing
         self._ended = False  # the child was told to close
         try:
-            bag_dir, path = self._call("open")
+            _, path = self._call("open")
         except (RecordingError, FileExistsError):
             self._ended = True
             self._process.wait(timeout=5.0)
             raise
-        self.bag_dir, self.path = Path(bag_dir), Path(path)
+        self.path = Path(path)
 
     def _call(self, command: str, *args):
         """Send ``command`` and return the child's answer; raise its failure (once: the child's
@@ -67,8 +68,7 @@ class RecorderProcess:
             self._conn.send((command, args))
             return self._conn.recv()
         except (EOFError, OSError):
-            return "error", f"recording failed: {self.path if hasattr(self, 'path') else 'the recorder'}: " \
-                            "the recorder process ended"
+            return "error", f"recording failed: {self.bag_dir}: the recorder process ended"
 
     def add_topic(self, topic: str, datatype: str, qos: list[dict], type_hash: str | None = None) -> None:
         """``McapRecorder.add_topic``."""
