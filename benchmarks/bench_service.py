@@ -1,18 +1,25 @@
-"""Benchmark: the planner service's round trip from a client in another process.
+"""Benchmark: the planner service's round trip from a client in another process, beside a bare
+rclpy service (std_srvs/Trigger, a node of a few lines spun by ``rclpy.spin``) measured in the
+same run, one call of each in turn (and the bare service and the cached plans also each alone,
+back to back): a cached request and uncached ones (each a different arm
+amplitude), with the planner
+recording and not, the whole plan and the plan without its trajectory's points
+(``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
+(``--uncached-calls`` for the uncached). Also the client's and the server's share of the plan's
+size: one PlanGait response serialized and deserialized by rclpy in this process, and the
+direct core call. Run:
 
-Starts ``biped-gait-planner`` (recording off), warms its cache with one request, then times
-200 calls of that cached request with a client that waits by ``spin_once`` (the fast style), 200 with ``spin_until_future_complete``, and 200 refused requests (a small
-reply: the middleware's share without the plan's 91-point trajectory); prints the medians next
-to the direct core call (``GaitPlanner.plan``, uncached). Run:
-
-    .venv/bin/python benchmarks/bench_service.py
+    .venv/bin/python benchmarks/bench_service.py [--calls 1000] [--uncached-calls 1000]
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -21,59 +28,148 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", "91")
 
 import rclpy  # noqa: E402
+from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
+from std_msgs.msg import Header  # noqa: E402
+from std_srvs.srv import Trigger  # noqa: E402
 
 from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.ros.client import ClientSide  # noqa: E402
+from biped_gait.ros.conversions import plan_msg  # noqa: E402
+from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
+from biped_gait.ros.planner_node import without_trajectory  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 
-from biped_gait.ros.client import ClientSide  # noqa: E402
-from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
+TRIGGER = "/bench_bare_trigger"
+ALPHA = math.radians(23.5)
 
-CALLS = 200
+
+def trigger_server() -> None:
+    """The yardstick: a node with one Trigger service, spun by ``rclpy.spin`` until killed."""
+    rclpy.init()
+    node = rclpy.create_node("bench_bare_trigger")
+
+    def answer(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+        response.success, response.message = True, "ok"
+        return response
+
+    node.create_service(Trigger, TRIGGER, answer)
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
+        pass
+
+
+def round_trip(side: ClientSide, client, request) -> float:
+    """The round-trip time (s) of one call."""
+    start = time.perf_counter()
+    response = side.call(client, request, timeout=60.0)
+    took = time.perf_counter() - start
+    assert getattr(response, "success", True), response.message
+    return took
+
+
+def interleaved(side: ClientSide, targets: dict[str, tuple], calls: int) -> dict[str, list[float]]:
+    """Round-trip times (s) of ``calls`` calls of each target (name -> (client, request)), one
+    of each in turn, so that a change of the machine's load falls on all alike."""
+    times: dict[str, list[float]] = {name: [] for name in targets}
+    for _ in range(calls):
+        for name, (client, request) in targets.items():
+            times[name].append(round_trip(side, client, request))
+    return times
+
+
+def summary(times: list[float]) -> str:
+    ordered = sorted(times)
+    p99 = ordered[min(len(ordered) - 1, math.ceil(0.99 * len(ordered)) - 1)]
+    return f"median {1e3 * statistics.median(ordered):7.3f} ms, p99 {1e3 * p99:7.3f} ms ({len(times)} calls)"
+
+
+def conversion_ms(response: PlanGait.Response, repeat: int = 200) -> tuple[float, float, int]:
+    """rclpy's serialization (server) and deserialization (client) of ``response`` (ms) and its
+    size (bytes)."""
+    data = serialize_message(response)
+    start = time.perf_counter()
+    for _ in range(repeat):
+        serialize_message(response)
+    middle = time.perf_counter()
+    for _ in range(repeat):
+        deserialize_message(data, PlanGait.Response)
+    end = time.perf_counter()
+    return 1e3 * (middle - start) / repeat, 1e3 * (end - middle) / repeat, len(data)
 
 
 def main() -> None:
-    request = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5))
-    planner = GaitPlanner()
-    core = []
-    for _ in range(20):
-        start = time.perf_counter()
-        planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
-        core.append(time.perf_counter() - start)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--calls", type=int, default=1000)
+    parser.add_argument("--uncached-calls", type=int, default=1000)
+    args = parser.parse_args()
+    cached = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
+    compact = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
+    results: dict[str, list[float]] = {}
+    alone: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        proc = start_entry("biped-gait-planner", ["-p", "record:=false"], log=Path(tmp) / "planner.log", cwd=Path(tmp))
-        side = ClientSide("bench_client")
+        where = Path(tmp)
+        trigger = subprocess.Popen([sys.executable, __file__, "--trigger-server"], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
+        planners = {record: start_entry("biped-gait-planner", ["-r", f"__node:=bench_planner_{record}", "-p",
+                                                               f"record:={record}", "-p", f"record_dir:={where}/bags"],
+                                        log=where / f"planner_{record}.log", cwd=where)
+                    for record in ("true", "false")}
+        side = ClientSide("bench_service_client")
         try:
-            client = side.node.create_client(PlanGait, "/biped_gait_planner/plan_gait")
-            side.connect(client)
-            assert side.call(client, request).success
-            spin_once, until_complete = [], []
-            for _ in range(CALLS):
-                start = time.perf_counter()
-                response = side.call(client, request)
-                spin_once.append(time.perf_counter() - start)
-                assert response.message.endswith("(cached)")
-            small = PlanGait.Request(step_length=float("nan"))  # refused at once: a small response
-            refused = []
-            for _ in range(CALLS):
-                start = time.perf_counter()
-                assert not side.call(client, small).success
-                refused.append(time.perf_counter() - start)
-            for _ in range(CALLS):
-                start = time.perf_counter()
-                future = client.call_async(request)
-                side.executor.spin_until_future_complete(future, timeout_sec=10.0)
-                until_complete.append(time.perf_counter() - start)
+            bare = side.node.create_client(Trigger, TRIGGER)
+            side.connect(bare)
+            clients = {record: side.node.create_client(PlanGait, f"/bench_planner_{record}/plan_gait")
+                       for record in planners}
+            for client in clients.values():
+                side.connect(client)
+            targets = {"bare Trigger service": (bare, Trigger.Request()),
+                       "cached, recording on": (clients["true"], cached),
+                       "cached, recording off": (clients["false"], cached),
+                       "cached, no trajectory, recording on": (clients["true"], compact),
+                       "cached, no trajectory, recording off": (clients["false"], compact)}
+            interleaved(side, targets, 20)  # solved once, then cached; warm-up
+            results.update(interleaved(side, targets, args.calls))
+            alone = {name: [round_trip(side, *targets[name]) for _ in range(args.calls)]
+                     for name in ("bare Trigger service", "cached, recording on", "cached, no trajectory, recording on")}
+            for k in range(args.uncached_calls):
+                for record in ("true", "false"):
+                    alpha = 0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0)
+                    name = f"uncached, recording {'on' if record == 'true' else 'off'}"
+                    results.setdefault(name, []).append(round_trip(
+                        side, clients[record], PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
         finally:
             side.close()
-            stop_process(proc)
-    ms = lambda xs: 1e3 * statistics.median(xs)  # noqa: E731
-    print(f"planner service, cached request, {CALLS} calls from another process (Fast DDS, localhost):")
-    print(f"  round trip, spin_once loop:               median {ms(spin_once):6.3f} ms")
-    print(f"  round trip, spin_until_future_complete:   median {ms(until_complete):6.3f} ms")
-    print(f"  round trip, refused request (small reply): median {ms(refused):6.3f} ms")
-    print(f"  direct core call GaitPlanner.plan (cold): median {ms(core):6.3f} ms")
+            for proc in planners.values():
+                stop_process(proc)
+            trigger.terminate()
+            trigger.wait()
+    solves = []
+    planner = GaitPlanner()
+    for k in range(20):
+        start = time.perf_counter()
+        planner.plan(GaitRequest(0.45, 0.45, 0.30 + 1e-4 * k, "normal"))
+        solves.append(time.perf_counter() - start)
+    plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header())
+    conversions = {"whole": conversion_ms(PlanGait.Response(success=True, message="admissible", plan=plan)),
+                   "without trajectory": conversion_ms(PlanGait.Response(success=True, message="admissible",
+                                                                         plan=without_trajectory(plan)))}
+    bare = statistics.median(results["bare Trigger service"])
+    print("planner service round trip from another process (Fast DDS, localhost), beside a bare Trigger service:")
+    for name, times in results.items():
+        print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare:5.2f} x the bare service)")
+    print("each alone, back to back (each server busy with one client, no other call between):")
+    bare_alone = statistics.median(alone["bare Trigger service"])
+    for name, times in alone.items():
+        print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare_alone:5.2f} x the bare service)")
+    print(f"  direct core call GaitPlanner.plan (uncached): median {1e3 * statistics.median(solves):7.3f} ms")
+    for what, (serialize, deserialize, size) in conversions.items():
+        print(f"  one PlanGait response, {what} ({size} bytes): rclpy serializes it in {serialize:.3f} ms (server), "
+              f"deserializes it in {deserialize:.3f} ms (client)")
 
 
 if __name__ == "__main__":
-    rclpy.logging.set_logger_level("bench_client", rclpy.logging.LoggingSeverity.WARN)
-    main()
+    if sys.argv[1:] == ["--trigger-server"]:
+        trigger_server()
+    else:
+        main()

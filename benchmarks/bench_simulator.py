@@ -1,16 +1,22 @@
-"""Benchmark: the simulator's real-time factor, publishing at 1 kHz with recording on, as fast
-as possible (real_time_factor 0), 10 steps of the default gait, planner and simulator as real
-node processes. Also times the walker alone (no ROS) and with the world view of every sample, for
-the split. Run:
+"""Benchmark: the simulator's real-time factor at 1 kHz, as fast as possible (real_time_factor 0),
+10 steps of the default gait, planner and simulator as real node processes, with every topic
+published and recorded, and with recording off; beside it, in the same run, the walker alone
+(integration, events, double supports, samples: no world view, no ROS), the walker with the
+world view and the messages serialized (no ROS), the cold gait solve (the machine's yardstick)
+and the cost of one message each way. Each real-time factor is the median of ``--repeat`` runs
+(their range beside it): the machine is shared, and a run's figure moves with the load. Run:
 
-    .venv/bin/python benchmarks/bench_simulator.py
+    .venv/bin/python benchmarks/bench_simulator.py [--steps N] [--repeat N]
 """
 
 from __future__ import annotations
 
+import argparse
+import io
 import math
 import os
 import re
+import statistics
 import tempfile
 import time
 from pathlib import Path
@@ -20,55 +26,152 @@ import numpy as np
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", "92")
 
+import rclpy  # noqa: E402
+from mcap.writer import Writer  # noqa: E402
+from rclpy.serialization import serialize_message  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+
 from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.core.samples import NativeSamples  # noqa: E402
-from biped_gait.core.walk import PlannedOrbit, Walker  # noqa: E402
-from biped_gait.core.world import WorldView  # noqa: E402
+from biped_gait.core.urdf import PHYSICAL_JOINTS  # noqa: E402
+from biped_gait.core.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
+from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
+from biped_gait.recording.writer import McapRecorder  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
+from biped_gait.ros.walk_messages import SampleMessages  # noqa: E402
 
-STEPS, RATE = 10, 1000.0
+RATE = 1000.0
+REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
 
 
-def core_only() -> tuple[float, float]:
-    """Real-time factors of the walker alone and of the walker with the world view of every
-    sample (evaluated per step in one call, then one WorldState a sample, as ``Walk`` does)."""
-    planner = GaitPlanner()
-    plan = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
-    walker, view = Walker(planner.hybrid, PlannedOrbit.of(plan), RATE), WorldView(planner.model)
+def per_call_us(call, count: int = 20000) -> float:
+    """Mean wall time of ``call()`` (us) over ``count`` calls."""
     start = time.perf_counter()
-    world_time = 0.0
-    for _ in range(STEPS):
-        side, foot = walker.state.stance_side, walker.state.stance_foot
-        outcome = walker.walk_step()
-        t0 = time.perf_counter()
-        pictures = view.pictures(np.array([s.q for s in outcome.samples]), np.array([s.qd for s in outcome.samples]),
-                                 side, foot)
-        [pictures.state(k) for k in range(len(pictures))]
-        world_time += time.perf_counter() - t0
-    wall = time.perf_counter() - start
-    return walker.state.t / (wall - world_time), walker.state.t / wall
+    for _ in range(count):
+        call()
+    return 1e6 * (time.perf_counter() - start) / count
+
+
+def cold_solve_ms(planner: GaitPlanner, repeat: int = 7) -> float:
+    """Median time of a gait solve with no guess (ms), as benchmarks/bench_gait.py's cold solve."""
+    planner.plan(REQUEST)
+    times = []
+    for alpha in np.radians(np.linspace(15.0, 30.0, repeat)):
+        start = time.perf_counter()
+        planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"))
+        times.append(time.perf_counter() - start)
+    return 1e3 * statistics.median(times)
+
+
+def core_factors(planner: GaitPlanner, steps: int) -> tuple[float, float]:
+    """Real-time factors of the walker alone, and of the walk's step batches with the world view
+    and every sampled message serialized (what the node does before publishing)."""
+    orbit = PlannedOrbit.of(planner.plan(REQUEST))
+    walker = Walker(planner.hybrid, orbit, RATE)
+    start = time.perf_counter()
+    for _ in range(steps):
+        walker.walk_step()
+    walker_rtf = walker.state.t / (time.perf_counter() - start)
+    walk = Walk(orbit, RATE, steps)
+    messages = SampleMessages(walk.world.link_frames)
+    start, simulated = time.perf_counter(), 0.0
+    for item in walk.batches():
+        if isinstance(item, StepSamples):
+            messages.encode(item.world, (item.t * 1e9).astype(np.int64), 0, item.samples[0].stance_side)
+            simulated = item.samples[-1].t + 1.0 / RATE
+    return walker_rtf, simulated / (time.perf_counter() - start)
+
+
+def message_costs(tmp: Path) -> dict[str, float]:
+    """Per-message costs (us): a JointState built, serialized, published as a message and as
+    bytes; an MCAP add_message (raw writer); a step of messages serialized from the templates
+    (per sample, 4 topics); a message queued for the recorder's writer thread."""
+    rclpy.init()
+    node = rclpy.create_node("bench_messages")
+    publisher = node.create_publisher(JointState, "/bench_joint_states", 50)
+    build = lambda: JointState(name=list(PHYSICAL_JOINTS), position=[0.1] * 7, velocity=[0.2] * 7,  # noqa: E731
+                               effort=[0.0] * 7)
+    msg = build()
+    data = serialize_message(msg)
+    writer = Writer(io.BytesIO())
+    writer.start(profile="ros2")
+    channel = writer.register_channel("/j", "cdr", writer.register_schema("sensor_msgs/msg/JointState", "ros2msg", b""))
+    recorder = BackgroundRecorder(McapRecorder(tmp, "bench_bag"))
+    recorder.add_topic("/j", "sensor_msgs/msg/JointState", [])
+    planner = GaitPlanner()
+    walk = Walk(PlannedOrbit.of(planner.plan(REQUEST)), RATE, 1)
+    step = next(item for item in walk.batches() if isinstance(item, StepSamples))
+    messages = SampleMessages(walk.world.link_frames)
+    stamps = (step.t * 1e9).astype(np.int64)
+    costs = {
+        "JointState built": per_call_us(build),
+        "serialize_message (JointState)": per_call_us(lambda: serialize_message(msg)),
+        "publish (message)": per_call_us(lambda: publisher.publish(msg)),
+        "publish (serialized bytes)": per_call_us(lambda: publisher.publish(data)),
+        "MCAP add_message (raw writer)": per_call_us(lambda: writer.add_message(channel, 1, data, 1)),
+        "recorder write (queued)": per_call_us(lambda: recorder.write("/j", data, 1)),
+        "templates, 4 topics per sample": per_call_us(lambda: messages.encode(step.world, stamps, 0, "right"), 200)
+        / len(stamps),
+    }
+    recorder.close()
+    node.destroy_node()
+    rclpy.shutdown()
+    return costs
+
+
+def factors(values: list[float]) -> str:
+    return f"{statistics.median(values):6.2f} [{min(values):.2f}, {max(values):.2f}]"
+
+
+def node_factor(where: Path, steps: int, record: bool) -> float:
+    """The simulator node's real-time factor (from its log), against a planner."""
+    where.mkdir(exist_ok=True)
+    tag = "on" if record else "off"
+    planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / f"planner_{tag}.log", cwd=where)
+    try:
+        sim = start_entry("biped-gait-simulator", [
+            "-p", f"steps:={steps}", "-p", "real_time_factor:=0.0", "-p", f"publish_rate:={RATE}",
+            "-p", "exit_when_done:=true", "-p", f"record:={str(record).lower()}", "-p", f"record_dir:={where}/bags"],
+            log=where / f"simulator_{tag}.log", cwd=where)
+        sim.wait(timeout=600)
+    finally:
+        stop_process(planner)
+    log = (where / f"simulator_{tag}.log").read_text()
+    match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
+    assert match, log
+    return float(match.group(2))
 
 
 def main() -> None:
-    walk_rtf, with_world_rtf = core_only()
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    planner = GaitPlanner()
+    cold = cold_solve_ms(planner)
+    walker, encoded, recorded, unrecorded = [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
-        planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / "biped-gait-planner.log",
-                              cwd=where)
-        sim = start_entry("biped-gait-simulator", ["-p", f"steps:={STEPS}", "-p", "real_time_factor:=0.0",
-                          "-p", f"publish_rate:={RATE}", "-p", "exit_when_done:=true", "-p", f"record_dir:={where}/bags"],
-                          log=where / "biped-gait-simulator.log", cwd=where)
-        sim.wait(timeout=600)
-        stop_process(planner)
-        log = (where / "biped-gait-simulator.log").read_text()
-    match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
-    assert match, log
-    print(f"simulator, {STEPS} steps at {RATE:g} Hz, as fast as possible:")
-    print(f"  node with publishing and MCAP recording: real-time factor {float(match.group(2)):.2f} "
-          f"({match.group(1)} s wall for {STEPS * 0.45:.2f} s simulated)")
-    print(f"  walker alone (integration, events, double support, samples): real-time factor {walk_rtf:.1f}")
-    print(f"  walker + world view (poses, momenta, link transforms):        real-time factor {with_world_rtf:.1f}")
+        for run in range(args.repeat):  # interleaved, so that a change of load falls on all alike
+            walker_rtf, encoded_rtf = core_factors(planner, args.steps)
+            walker.append(walker_rtf)
+            encoded.append(encoded_rtf)
+            recorded.append(node_factor(where / f"run{run}", args.steps, record=True))
+            unrecorded.append(node_factor(where / f"run{run}", args.steps, record=False))
+        costs = message_costs(where)
+    simulated = args.steps * REQUEST.period
+    median = statistics.median
+    print(f"simulator at {RATE:g} Hz, {args.steps} steps ({simulated:.2f} s simulated), as fast as possible, "
+          f"median of {args.repeat} runs [range]; cold gait solve on this machine: {cold:.1f} ms (median)")
+    print(f"  node, every topic published and recorded: real-time factor {factors(recorded)}")
+    print(f"  node, published, recording off:           real-time factor {factors(unrecorded)}")
+    print(f"  walker alone (no world view, no ROS):     real-time factor {factors(walker)}; "
+          f"node with recording / walker alone = {median(recorded) / median(walker):.2f}")
+    print(f"  walker + world view + messages serialized (no ROS): real-time factor {factors(encoded)}")
     print(f"  (samples evaluated {'in the compiled twin' if NativeSamples is not None else 'by the Python loops'})")
+    print("per message (us):")
+    for what, cost in costs.items():
+        print(f"  {what:34s} {cost:7.2f}")
 
 
 if __name__ == "__main__":

@@ -28,14 +28,14 @@ def planner_process(name: str, cwd: Path) -> Iterator[subprocess.Popen]:
     assert stop_node(proc) == 0
 
 
-def start_simulator(cwd: Path, planner: str, *params: str) -> subprocess.Popen:
-    """A simulator node using the planner node ``planner``, recording under ``cwd/bags``, with
-    the parameters ``params`` (NAME:=VALUE)."""
+def start_simulator(where: Path, planner: str, *params: str) -> subprocess.Popen:
+    """A simulator asking the planner node named ``planner``, recording under ``where/bags``,
+    with the parameters ``params`` ('name:=value'), logging to ``where``."""
     args = ["-p", f"plan_service:=/{planner}/plan_gait", "-p", f"optimize_action:=/{planner}/optimize_arm_swing",
-            "-p", f"record_dir:={cwd / 'bags'}"]
-    for param in params:
-        args += ["-p", param]
-    return start_node("biped-gait-simulator", *args, cwd=cwd)
+            "-p", f"record_dir:={where / 'bags'}"]
+    for p in params:
+        args += ["-p", p]
+    return start_node("biped-gait-simulator", *args, cwd=where)
 
 
 def stop_node(proc: subprocess.Popen, sig: int = signal.SIGTERM, timeout: float = 20.0) -> int:

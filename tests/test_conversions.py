@@ -18,7 +18,9 @@ from std_msgs.msg import Header  # noqa: E402
 
 from biped_gait.core.configurations import GaitMode  # noqa: E402
 from biped_gait.core.gait_views import FIELDS  # noqa: E402
+from biped_gait.core.model import JOINT_NAMES  # noqa: E402
 from biped_gait.core.planner import GaitRequest  # noqa: E402
+from biped_gait.core.urdf import PHYSICAL_JOINTS, physical_joint_array  # noqa: E402
 from biped_gait.core.walk import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
 from biped_gait.ros.conversions import mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key  # noqa: E402
@@ -45,14 +47,20 @@ def test_every_message_field_of_the_field_list_carries_the_core_value(default_ga
         else:
             assert np.allclose(_as_list(got), _as_list(value), rtol=0, atol=0), field.key
         checked += 1
-    # every GaitPlan field but the header, the mode code, the reasons and the trajectory
-    assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons", "trajectory"})
+    # every GaitPlan field but the header, the mode code, the reasons and the trajectory with its joint mapping
+    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs"}
+    assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons"} - trajectory)
     assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
     assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)
+    assert list(msg.trajectory.joint_names) == list(PHYSICAL_JOINTS) and msg.trajectory_stance_side == "right"
     point = msg.trajectory.points[-1]
-    assert np.allclose(point.positions, default_gait.figures.samples.q[-1], atol=0)
-    assert np.allclose(point.accelerations, default_gait.figures.samples.qdd[-1], atol=0)
-    assert list(point.effort) == [0.0] * 9  # ballistic: no joint torque
+    assert np.allclose(point.positions, physical_joint_array(default_gait.figures.samples.q[-1]), atol=0)
+    assert np.allclose(point.accelerations, physical_joint_array(default_gait.figures.samples.qdd[-1]), atol=0)
+    assert list(point.effort) == [0.0] * 7  # ballistic: no joint torque
+    # the stated mapping: URDF angle = sign * the model coordinate it is in this step
+    q = default_gait.figures.samples.q[-1]
+    for name, sign, angle in zip(msg.joint_roles, msg.joint_signs, point.positions):
+        assert angle == sign * q[JOINT_NAMES.index(name)], name
 
 
 def test_the_orbit_a_walk_needs_survives_the_message(default_gait):

@@ -36,7 +36,7 @@ from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitEvent, GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
-from .ros_helpers import read_bag, start_node, stop_node
+from .ros_helpers import read_bag, start_node, start_simulator as simulator, stop_node
 
 pytestmark = [pytest.mark.faults, pytest.mark.ros]
 
@@ -100,14 +100,6 @@ def planner(tmp_path_factory):
     proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", "record:=false", cwd=where)
     yield name
     assert stop_node(proc) == 0, log_of(where, "biped-gait-planner")
-
-
-def simulator(where: Path, planner: str, *params: str) -> subprocess.Popen:
-    args = ["-p", f"plan_service:=/{planner}/plan_gait", "-p", f"optimize_action:=/{planner}/optimize_arm_swing",
-            "-p", f"record_dir:={where / 'bags'}"]
-    for p in params:
-        args += ["-p", p]
-    return start_node("biped-gait-simulator", *args, cwd=where)
 
 
 # Signals ------------------------------------------------------------------------------------

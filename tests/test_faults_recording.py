@@ -9,12 +9,15 @@ import errno
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 import yaml
 
+from biped_gait.recording.background import BackgroundRecorder
 from biped_gait.recording.qos import qos_description
+from biped_gait.recording.recorder_process import RecorderProcess
 from biped_gait.recording.reader import open_bag
 from biped_gait.recording.recover import is_complete, recover
 from biped_gait.recording.writer import RESERVE_NAME, McapRecorder, RecordingError
@@ -128,3 +131,65 @@ def test_recover_refuses_what_is_not_mcap(tmp_path):
     done = subprocess.run([ENTRY, "recover", str(tmp_path / "notes.mcap")], capture_output=True, text=True, timeout=60)
     assert done.returncode == 2 and done.stderr == f"biped-gait: error: {tmp_path / 'notes.mcap'}: not an MCAP file\n"
     assert not (tmp_path.parent / "notes_recovered").exists()
+
+
+def test_the_background_recorder_reports_a_full_disk_once_and_finishes_the_file(tmp_path):
+    """The writer thread meets the full disk; the next write says so (one line), later ones and
+    ``close`` are quiet, and the file holds what was handed over before the failure."""
+    recorder = BackgroundRecorder(McapRecorder(tmp_path, "bag", chunk_size=2048, opener=FullDisk(room=20_000)))
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+    errors = []
+    for i in range(20_000):
+        try:
+            recorder.write("/joint_states", joint_state(i), 10 + i)
+        except RecordingError as exc:
+            errors.append(str(exc))
+        if i % 500 == 499:
+            time.sleep(0.05)  # the writer thread's turn
+    recorder.close()
+    assert len(errors) == 1 and "No space left on device" in errors[0] and "\n" not in errors[0]
+    assert is_complete(recorder.path) and recorder.failure == errors[0]
+    [(_, (datatype, count))] = open_bag(recorder.bag_dir).topics().items()
+    assert datatype == JOINTS and 0 < count < 20_000
+
+
+def test_the_background_recorder_serializes_off_the_callers_path_and_drains_at_close(tmp_path):
+    recorder = BackgroundRecorder(McapRecorder(tmp_path, "bag"))
+    recorder.add_topic("/robot_description", STRING, [LATCHED])
+    recorder.write("/robot_description", lambda: string("<robot/>"), 1)  # serialized on the writer thread
+    for i in range(3000):
+        recorder.write("/robot_description", string(str(i)), 2 + i)
+    recorder.close()
+    assert open_bag(recorder.bag_dir).topics() == {"/robot_description": (STRING, 3001)}
+    info = yaml.safe_load((recorder.bag_dir / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    [entry] = info["topics_with_message_count"]
+    assert entry["topic_metadata"]["type_description_hash"].startswith("RIHS01_")
+
+
+def test_the_recorder_process_says_what_the_recorder_says(tmp_path):
+    """A recorder in a process of its own: the same one-line failures, raised in the caller,
+    and a file that readers open once closed."""
+    (tmp_path / "a_file").write_text("")
+    with pytest.raises(RecordingError, match=r"^recording failed: cannot create .*a_file/bags/bag: Not a directory$"):
+        RecorderProcess(tmp_path / "a_file" / "bags", "bag")
+    recorder = BackgroundRecorder(RecorderProcess(tmp_path, "bag", chunk_size=1024))
+    with pytest.raises(FileExistsError):
+        RecorderProcess(tmp_path, "bag")
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+    for i in range(500):
+        recorder.write("/joint_states", joint_state(i), i)
+    recorder.close()
+    assert open_bag(recorder.bag_dir).topics() == {"/joint_states": (JOINTS, 500)}
+    deleted = BackgroundRecorder(RecorderProcess(tmp_path, "deleted", chunk_size=1024))
+    deleted.add_topic("/joint_states", JOINTS, [STREAM])
+    shutil.rmtree(deleted.bag_dir)
+    errors = []
+    for i in range(3000):
+        try:
+            deleted.write("/joint_states", joint_state(i), i)
+        except RecordingError as exc:
+            errors.append(str(exc))
+        if i % 500 == 499:
+            time.sleep(0.05)
+    deleted.close()
+    assert len(errors) == 1 and "was deleted while recording" in errors[0]

@@ -18,7 +18,9 @@ from mcap_ros2.reader import read_ros2_messages
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
 
+from biped_gait.core.model import JOINT_NAMES
 from biped_gait.core.planner import GaitRequest
+from biped_gait.core.urdf import PHYSICAL_JOINTS, physical_joint_array
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
@@ -67,10 +69,14 @@ def test_service_answer_equals_the_core(ros, planner, default_gait):
     assert np.allclose(plan.qd_a, default_gait.qd_a, atol=1e-12)
     assert plan.converged and plan.admissible
     assert len(plan.trajectory.points) == len(default_gait.figures.samples.t)
-    assert plan.trajectory.joint_names[0] == "stance_ankle_roll"
+    assert list(plan.trajectory.joint_names) == list(PHYSICAL_JOINTS) and plan.trajectory_stance_side == "right"
     last = plan.trajectory.points[-1]
     assert last.time_from_start.sec + 1e-9 * last.time_from_start.nanosec == pytest.approx(0.45, abs=1e-9)
-    assert np.allclose(last.positions, default_gait.step.q_target, atol=1e-9)
+    assert np.allclose(last.positions, physical_joint_array(default_gait.step.q_target, "right"), atol=1e-9)
+    # the stated mapping gives the model's coordinates back
+    model = {name: sign * angle for name, sign, angle in zip(plan.joint_roles, plan.joint_signs, last.positions)}
+    assert model["stance_hip"] == pytest.approx(default_gait.step.q_target[JOINT_NAMES.index("stance_hip")], abs=1e-9)
+    assert model["swing_knee"] == pytest.approx(default_gait.step.q_target[JOINT_NAMES.index("swing_knee")], abs=1e-9)
 
 
 BAD_REQUESTS = [
@@ -271,3 +277,16 @@ def test_the_service_answers_while_an_optimization_runs(ros, action_client, defa
     assert not result_future.done(), "the optimization finished before the call: nothing was shown"
     print(f"\nplan_gait answered in {answered_in * 1000:.0f} ms while the optimization ran")
     ros.wait(result_future.done, 120.0)
+
+
+def test_a_plan_without_its_trajectory_is_the_same_plan(ros):
+    """omit_trajectory: the same answer but the trajectory's points, uncached and cached."""
+    request = plan_request(arm_amplitude=0.3712)
+    compact = ros.call(ros.client, plan_request(arm_amplitude=0.3712, omit_trajectory=True))
+    full = ros.call(ros.client, request)
+    again = ros.call(ros.client, plan_request(arm_amplitude=0.3712, omit_trajectory=True))
+    assert compact.success and full.success and again.message.endswith("(cached)")
+    assert compact.plan.trajectory.points == [] and again.plan.trajectory.points == [] and full.plan.trajectory.points
+    assert list(compact.plan.trajectory.joint_names) == list(full.plan.trajectory.joint_names)
+    for name in ("effort_cost", "theta", "q0", "qd_a", "joint_roles"):
+        assert np.array_equal(getattr(compact.plan, name), getattr(full.plan, name)), name

@@ -28,6 +28,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
+from rosgraph_msgs.msg import Clock
 
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
@@ -196,3 +197,29 @@ def test_bad_input_is_one_line_and_status_2(walk_bag, tmp_path, args, message):
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.startswith("biped-gait-replay: error: ") and done.stderr.count("\n") == 1, done.stderr
     assert message in done.stderr
+
+
+def test_loop_restamps_forward_and_clock_follows_the_recording(walk_bag, recorded, listener, tmp_path):
+    """Each pass of --loop is stamped one span later than the one before: stamps only increase;
+    --clock publishes the recording's time, increasing, from its first message's."""
+    clocks: list[int] = []
+    listener.side.node.create_subscription(
+        Clock, "/clock", lambda m: clocks.append(m.clock.sec * 1_000_000_000 + m.clock.nanosec),
+        QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT))
+    count = len(recorded["/joint_states"])
+    proc = listener.replay(tmp_path, str(walk_bag), "--loop", "--rate", "4", "--clock", "100", "--topics", "/joint_states")
+    try:
+        listener.side.wait(lambda: len(listener.received["/joint_states"]) >= 2 * count + 10, timeout=60.0)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=10.0) == 0, (tmp_path / "replay.log").read_text()
+    stamps = [deserialize_message(data, JointState).header.stamp for data, _ in listener.received["/joint_states"]]
+    stamps = np.array([s.sec * 1_000_000_000 + s.nanosec for s in stamps])
+    assert np.all(np.diff(stamps) > 0), "a stamp went back"
+    first = [deserialize_message(data, JointState).header.stamp for _, data in recorded["/joint_states"][:2]]
+    period = (first[1].sec - first[0].sec) * 1_000_000_000 + first[1].nanosec - first[0].nanosec
+    assert stamps[count] - stamps[count - 1] == period  # the second pass goes on at the recorded rate
+    assert stamps[count] - stamps[0] == recorded["/joint_states"][-1][0] - recorded["/joint_states"][0][0] + period
+    start = recorded["/joint_states"][0][0]
+    assert len(clocks) > 20 and np.all(np.diff(clocks) >= 0) and clocks[0] >= start
+    assert clocks[-1] > start + (stamps[count] - stamps[0])  # the clock runs on through the loops

@@ -10,7 +10,7 @@ import pytest
 
 from biped_gait.core.hybrid import TouchdownGuard
 from biped_gait.core.planner import GaitRequest
-from biped_gait.core.walk import PlannedOrbit, Walker
+from biped_gait.core.walk import PlannedOrbit, Sample, StepSamples, Walk, Walker
 
 pytestmark = pytest.mark.core
 
@@ -147,3 +147,20 @@ def test_a_grazing_touchdown_is_walked(planner):
         assert o.touchdown.t_step == pytest.approx(gait.period, abs=1e-9)
         assert o.touchdown.W == pytest.approx(gait.W, rel=1e-7)
     assert np.allclose(walker.state.stance_foot, [20 * 0.50, -0.2, 0.0], atol=1e-9)
+
+
+def test_a_walk_by_steps_gives_what_it_gives_sample_by_sample(default_gait):
+    """``Walk.batches``: each step's samples at once, with the world pictures as arrays; the
+    same samples, world states and events as iterating the walk."""
+    orbit = PlannedOrbit.of(default_gait)
+    items = list(Walk(orbit, 200.0, 2))
+    batches = list(Walk(orbit, 200.0, 2).batches())
+    steps = [b for b in batches if isinstance(b, StepSamples)]
+    samples = [item for item in items if isinstance(item, Sample)]
+    assert len(steps) == 2 and sum(len(b.samples) for b in steps) == len(samples)
+    assert [type(b).__name__ for b in batches] == ["StepSamples", "Touchdown", "StepSamples", "Touchdown", "Finished"]
+    flat = [(k, b) for b in steps for k in range(len(b.samples))]
+    for sample, (k, batch) in zip(samples, flat):
+        assert sample.t == batch.t[k] and np.array_equal(sample.q, batch.samples[k].q)
+        assert sample.world.joint_positions == batch.world.joint_positions[k].tolist()
+    assert steps[1].samples[0].stance_side == "left" and steps[1].world.stance_foot[0] == pytest.approx(0.45)

@@ -1,5 +1,6 @@
 """Pacing a simulation against the wall clock: sample at simulated time t is released at
-``start + t / factor`` (s, monotonic clock); a factor of 0 runs as fast as possible."""
+``start + t / factor`` (s, monotonic clock); a factor of 0 runs as fast as possible. A pause
+moves ``start`` later by its length."""
 
 from __future__ import annotations
 
@@ -25,6 +26,10 @@ class Pacer:
                 return not stop.wait(delay)
         return not stop.is_set()
 
+    def delay(self, seconds: float) -> None:
+        """Move the schedule ``seconds`` (s) later: the time the simulation was held (a pause)."""
+        self.start += seconds
+
     def elapsed(self) -> float:
-        """Wall time since the start (s)."""
+        """Wall time since the start, less the delays (s)."""
         return time.monotonic() - self.start

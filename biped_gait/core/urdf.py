@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .model import JOINT_NAMES
 from .params import BipedParams, Link
 
 PHYSICAL_JOINTS = (
@@ -42,6 +43,14 @@ def physical_joint_array(q: np.ndarray, stance_side: str = "right") -> np.ndarra
         raise ValueError(f"stance side must be 'right' or 'left', got {stance_side!r}")
     index, sign = zip(*_FROM_MODEL[stance_side])
     return np.asarray(q)[..., list(index)] * np.array(sign)
+
+
+def joint_roles(stance_side: str = "right") -> tuple[tuple[str, float], ...]:
+    """Per joint of PHYSICAL_JOINTS, the model coordinate it is (a name of ``model.JOINT_NAMES``)
+    and the sign: URDF angle = sign * that coordinate, with the ``stance_side`` foot in stance."""
+    if stance_side not in _FROM_MODEL:
+        raise ValueError(f"stance side must be 'right' or 'left', got {stance_side!r}")
+    return tuple((JOINT_NAMES[index], sign) for index, sign in _FROM_MODEL[stance_side])
 
 
 def physical_joint_positions(q: np.ndarray, stance_side: str = "right") -> dict[str, float]:

@@ -47,7 +47,7 @@ from .params import load_params
 from .push import AppliedPush, Push, TrunkPush
 from .settings import DEFAULTS, Settings
 from .steering import MomentumSteering, SteeringFailed, reference
-from .world import WorldState, WorldView
+from .world import WorldPictures, WorldState, WorldView
 
 
 @dataclass(frozen=True)
@@ -99,6 +99,21 @@ class Sample:
     stance_side: str = "right"
     stance_foot: np.ndarray | None = None
     world: WorldState | None = None
+
+
+@dataclass(frozen=True)
+class StepSamples:
+    """Samples of one step as ``Walk.batches`` yields them (all of the step's, or those on one
+    side of a push): each ``Sample`` (without its ``world``), and the robot in world terms at
+    their instants, one row each."""
+
+    samples: list[Sample]
+    world: WorldPictures
+
+    @property
+    def t(self) -> np.ndarray:
+        """The samples' times in the walk (s)."""
+        return np.array([sample.t for sample in self.samples])
 
 
 @dataclass(frozen=True)
@@ -413,10 +428,11 @@ class Walk:
     Iterating yields, in time order: ``Sample`` (every 1 / ``rate`` s of simulated time, with
     the robot in world terms), ``AppliedPush`` where a push acted, ``Touchdown`` at the end of
     each step, and at the end one of ``Finished`` (``steps`` steps made; 0 means never),
-    ``Fell``, or ``CouldNotStart`` (then nothing else). ``model`` and ``world`` (None if it
-    could not start) describe the robot. ``momentum_rate``: the walker's momentum steering
-    (``Walker``); ``before_step``: called with the walker before each step (pushes to apply, a
-    gait to aim at: ``Walker.push``, ``Walker.retarget``).
+    ``Fell``, or ``CouldNotStart`` (then nothing else). ``batches`` yields the same with the
+    samples between two events at once, as arrays. ``model`` and ``world`` (None if it could not
+    start) describe the robot. ``momentum_rate``: the walker's momentum steering (``Walker``);
+    ``before_step``: called with the walker before each step (pushes to apply, a gait to aim at:
+    ``Walker.push``, ``Walker.retarget``).
     """
 
     def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,
@@ -447,6 +463,16 @@ class Walk:
         self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings, momentum_rate)
 
     def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
+        for item in self.batches():
+            if isinstance(item, StepSamples):
+                for k, sample in enumerate(item.samples):
+                    yield replace(sample, world=item.world.state(k))
+            else:
+                yield item
+
+    def batches(self) -> Iterator[StepSamples | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
+        """As iterating, but the samples of a step come at once, as a ``StepSamples`` (arrays);
+        a push within a step splits them: the samples before it, the push, the samples after."""
         if self.walker is None:
             yield CouldNotStart(self.problem)
             return
@@ -460,11 +486,18 @@ class Walk:
             if outcome.samples:
                 pictures = world.pictures(np.array([x.q for x in outcome.samples]),
                                           np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
-                for k, sample in enumerate(outcome.samples):
-                    while pushes and pushes[0].t <= sample.t:
-                        yield pushes.pop(0)
-                    yield replace(sample, world=pictures.state(k))
-            yield from pushes
+                times = np.array([x.t for x in outcome.samples])
+                start = 0
+                for push in pushes:  # each before the first sample at or after it
+                    end = int(np.searchsorted(times, push.t, side="left"))
+                    if end > start:
+                        yield StepSamples(outcome.samples[start:end], pictures.rows(start, end))
+                    yield push
+                    start = max(start, end)
+                if start < len(times):
+                    yield StepSamples(outcome.samples[start:], pictures.rows(start, len(times)))
+            else:
+                yield from pushes
             if outcome.touchdown is None:
                 t = outcome.samples[-1].t if outcome.samples else s.t
                 yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)

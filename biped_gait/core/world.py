@@ -11,7 +11,7 @@ instants are computed in one call (``WorldView.pictures``, in the compiled twin 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 import pinocchio as pin
@@ -75,6 +75,10 @@ class WorldPictures:
     def __len__(self) -> int:
         return len(self.pelvis_position)
 
+    def rows(self, start: int, stop: int) -> "WorldPictures":
+        """The instants ``start`` to ``stop`` (excluded) alone."""
+        return replace(self, **{name: getattr(self, name)[start:stop] for name in _PER_INSTANT})
+
     def state(self, i: int) -> WorldState:
         """The ``i``-th instant as a ``WorldState``."""
         links = [Transform(WORLD_FRAME, BASE_FRAME, self.pelvis_position[i], self.pelvis_quaternion[i])]
@@ -96,6 +100,9 @@ class WorldPictures:
         )
 
 
+_PER_INSTANT = tuple(f.name for f in fields(WorldPictures) if f.name not in ("stance_foot", "link_frames"))
+
+
 def _quaternion(rotation: np.ndarray) -> np.ndarray:
     return pin.Quaternion(rotation).coeffs().copy()  # x, y, z, w
 
@@ -112,7 +119,7 @@ class WorldView:
         self.placements = JointPlacements(self.urdf_model, native)
         self._columns = [self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in PHYSICAL_JOINTS]
         # (parent link, child link) of every moving joint, in the URDF model's order.
-        self._frames = tuple(
+        self.link_frames = tuple(
             (BASE_FRAME if self.urdf_model.parents[jid] == 0 else self._link_of_joint(self.urdf_model.parents[jid]),
              self._link_of_joint(jid))
             for jid in range(1, self.urdf_model.njoints)
@@ -157,7 +164,7 @@ class WorldView:
             com=stance_foot + mirror * poses.com,
             momentum_about_foot=axial * poses.angular_momentum,
             momentum_about_com=axial * h_com,
-            link_frames=self._frames,
+            link_frames=self.link_frames,
             link_translations=translations,
             link_quaternions=quaternions,
         )

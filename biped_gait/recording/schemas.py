@@ -1,15 +1,19 @@
-"""ROS 2 message definitions (``ros2msg`` schema text) for MCAP recording.
+"""ROS 2 message definitions (``ros2msg`` schema text) and type description hashes for MCAP
+recording.
 
 A schema is the type's definition followed by each type it uses, after a line of 80 ``=`` and
 ``MSG: pkg/Type``. Definitions come from the ``.msg`` files installed in the ament prefixes
 (the venv here). Field types are written fully qualified, so readers need no package context.
 Only message types are recorded: the generated service and action parts (``PlanGait_Request``
 ...) have names that MCAP's ROS 2 readers refuse. Works without rosidl_runtime_py, which is not
-installable here.
+installable here. Type hashes ('RIHS01_...', what rclpy reports for a topic's type and rosbag2
+writes as ``type_description_hash``) come from the type descriptions rosidl installs beside the
+definitions (``share/<pkg>/msg/<Type>.json``).
 """
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import sys
@@ -45,6 +49,20 @@ def _find(pkg: str, kind: str, filename: str) -> str:
         if path.is_file():
             return path.read_text()
     raise LookupError(f"no definition of {pkg}/{kind}/{filename} in {[str(p) for p in _prefixes()]}")
+
+
+@lru_cache(maxsize=None)
+def type_hash(datatype: str) -> str:
+    """The type description hash ('RIHS01_...') of 'pkg/msg/Type'; '' if no type description
+    is installed for it."""
+    parts = datatype.split("/")
+    pkg, name = parts[0], parts[-1]
+    try:
+        hashes = json.loads(_find(pkg, "msg", f"{name}.json"))["type_hashes"]
+    except (LookupError, ValueError, TypeError):
+        return ""
+    full = f"{pkg}/msg/{name}"
+    return next((h["hash_string"] for h in hashes if h.get("type_name") == full), "")
 
 
 def _raw_definition(pkg: str, name: str) -> str:

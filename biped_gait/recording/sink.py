@@ -37,6 +37,11 @@ class FileSink:
     def tell(self) -> int:
         return self._offset
 
+    @property
+    def pending(self) -> int:
+        """Bytes handed over and not yet in the file."""
+        return len(self._pending)
+
     def flush(self) -> None:
         """Write what is pending; ``OSError`` if the file refuses (what it did not take stays pending)."""
         while self._pending:

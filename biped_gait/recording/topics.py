@@ -20,6 +20,7 @@ TF = "/tf"
 TF_STATIC = "/tf_static"
 GAIT_PHASE = "/gait_phase"
 CMD_VEL = "/cmd_vel"  # subscribed: the commanded walking speed
+CLOCK = "/clock"
 
 GAIT_PLAN_TYPE = "biped_gait_interfaces/msg/GaitPlan"
 PLAN_CALL_TYPE = "biped_gait_interfaces/msg/PlanGaitCall"

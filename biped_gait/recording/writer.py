@@ -33,7 +33,7 @@ from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import Writer as RawWriter
 
 from .metadata import TopicRecord, write_metadata
-from .schemas import schema_text
+from .schemas import schema_text, type_hash as installed_type_hash
 from .sink import FileSink, Opener, open_unbuffered
 
 DEFAULT_CHUNK_SIZE = 64 * 1024
@@ -89,10 +89,13 @@ class McapRecorder:
         self.closed = False
         self.failure = ""  # why recording stopped early ("" while it goes on or closed cleanly)
 
-    def add_topic(self, topic: str, datatype: str, qos: list[dict], type_hash: str = "") -> None:
+    def add_topic(self, topic: str, datatype: str, qos: list[dict], type_hash: str | None = None) -> None:
         """Register ``topic`` of type ``datatype`` ('pkg/msg/Type') with the QoS profiles its
-        publishers offer (rosbag2 dictionaries, ``qos.qos_description``), as rosbag2 does: the
-        schema once per type, the channel with its QoS in its metadata. Idempotent."""
+        publishers offer (rosbag2 dictionaries, ``qos.qos_description``) and its type description
+        hash (None: the installed type description's), as rosbag2 does: the schema once per type,
+        the channel with its QoS and type hash in its metadata. Idempotent."""
+        if type_hash is None:
+            type_hash = installed_type_hash(datatype)
         with self._lock:
             if topic in self._channels or self.closed:
                 return
@@ -110,23 +113,33 @@ class McapRecorder:
         """Record the CDR bytes ``data`` on the registered ``topic`` at ``stamp_ns`` (default:
         now, ns since the epoch); nothing once closed. ``RecordingError`` (once) if the file
         cannot take it: the recorder has then finished the file as far as it got."""
-        stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
+        self.write_many([(topic, data, time.time_ns() if stamp_ns is None else int(stamp_ns))])
+
+    def write_many(self, messages: list[tuple[str, bytes, int]]) -> None:
+        """Record ``messages`` (topic, CDR bytes, stamp in ns since the epoch), in this order,
+        each chunk they close handed to the file at once; as ``write`` otherwise."""
         with self._lock:
-            if self.closed:
+            if self.closed or not messages:
                 return
-            entry = self._channels[topic]
-            self._writer.add_message(entry.id, log_time=stamp, data=data, publish_time=stamp,
-                                     sequence=entry.record.count)
-            entry.record.count += 1
-            self._first = stamp if self._first is None else min(self._first, stamp)
-            self._last = stamp if self._last is None else max(self._last, stamp)
-            written = self._sink.written
-            try:
-                self._sink.flush()  # a closed chunk reaches the disk now
-            except OSError as exc:
-                self._fail(_reason(exc))
-            if self._sink.written != written and self._sink.deleted:
-                self._fail(f"{self.bag_dir} was deleted while recording")
+            add, channels, sink = self._writer.add_message, self._channels, self._sink
+            for topic, data, stamp in messages:
+                entry = channels[topic]
+                add(entry.id, log_time=stamp, data=data, publish_time=stamp, sequence=entry.record.count)
+                entry.record.count += 1
+                self._first = stamp if self._first is None or stamp < self._first else self._first
+                self._last = stamp if self._last is None or stamp > self._last else self._last
+                if sink.pending:
+                    self._flush()
+
+    def _flush(self) -> None:
+        """Hand the closed chunk to the file; ``_fail`` if the file refuses or was deleted."""
+        written = self._sink.written
+        try:
+            self._sink.flush()
+        except OSError as exc:
+            self._fail(_reason(exc))
+        if self._sink.written != written and self._sink.deleted:
+            self._fail(f"{self.bag_dir} was deleted while recording")
 
     def _fail(self, reason: str) -> None:
         """Stop recording: free the reserve, finish the file as far as it got, and raise."""

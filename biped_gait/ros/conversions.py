@@ -19,12 +19,13 @@ from ..core.configurations import GaitMode
 from ..core.gait import Gait
 from ..core.gait_views import FIELDS
 from ..core.impulses import EffortOptions
-from ..core.model import JOINT_NAMES
 from ..core.planner import GaitRequest
+from ..core.urdf import PHYSICAL_JOINTS, joint_roles, physical_joint_array
 from ..core.walk import PlannedOrbit
 from ..recording.topics import MODE_CODES
 
 MODE_TO_MSG = {mode: code for code, mode in MODE_CODES.items()}
+PLAN_STANCE_SIDE = "right"  # a plan's step stands on the model's leg 1, the right foot
 
 
 def mode_from_msg(code: int) -> GaitMode:
@@ -65,16 +66,18 @@ def duration_msg(seconds: float) -> Duration:
 
 
 def trajectory_msg(gait: Gait) -> JointTrajectory:
-    """The ballistic step as a JointTrajectory of the model's joints q1..q9 (no header stamp):
-    positions (rad), velocities (rad/s), accelerations (rad/s^2), and efforts (N m) zero, as
-    no joint torque acts in the ballistic single support."""
-    traj = JointTrajectory(joint_names=list(JOINT_NAMES))
+    """The ballistic step as a JointTrajectory of the URDF's joints with the right foot (the
+    model's leg 1) in stance (no header stamp): positions (rad), velocities (rad/s),
+    accelerations (rad/s^2) in the URDF's convention, and efforts (N m) zero, as no joint torque
+    acts in the ballistic single support."""
+    traj = JointTrajectory(joint_names=list(PHYSICAL_JOINTS))
     samples = gait.figures.samples if gait.figures is not None else None
     if samples is not None:
-        zero = [0.0] * len(JOINT_NAMES)
-        for t, q, qd, qdd in zip(samples.t, samples.q, samples.qd, samples.qdd):
-            traj.points.append(JointTrajectoryPoint(positions=q.tolist(), velocities=qd.tolist(),
-                                                    accelerations=qdd.tolist(), effort=zero,
+        zero = [0.0] * len(PHYSICAL_JOINTS)
+        q, qd, qdd = (physical_joint_array(a, PLAN_STANCE_SIDE) for a in (samples.q, samples.qd, samples.qdd))
+        for k, t in enumerate(samples.t):
+            traj.points.append(JointTrajectoryPoint(positions=q[k].tolist(), velocities=qd[k].tolist(),
+                                                    accelerations=qdd[k].tolist(), effort=zero,
                                                     time_from_start=duration_msg(t)))
     return traj
 
@@ -86,8 +89,10 @@ def _fixed(values, size: int) -> list[float]:
 
 def plan_msg(gait: Gait, header) -> GaitPlan:
     """GaitPlan message of a core gait, stamped with ``header``."""
+    roles = joint_roles(PLAN_STANCE_SIDE)
     msg = GaitPlan(header=header, mode=MODE_TO_MSG[gait.mode], reasons=list(gait.reasons),
-                   trajectory=trajectory_msg(gait))
+                   trajectory=trajectory_msg(gait), trajectory_stance_side=PLAN_STANCE_SIDE,
+                   joint_roles=[name for name, _ in roles], joint_signs=[sign for _, sign in roles])
     for f in FIELDS:
         if f.msg is None:
             continue

@@ -23,6 +23,10 @@ class GaitPhases:
         self.publisher = publisher
         self._step: int | None = None
 
+    def restart(self) -> None:
+        """A new walk begins (a reset): its first sample begins a phase whatever its step."""
+        self._step = None
+
     def sample(self, step: int, stance_side: str, t: float, start_ns: int) -> None:
         """A sample of ``step`` at ``t`` (s in the walk): its single support begins if it is the
         step's first."""

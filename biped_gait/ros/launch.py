@@ -8,6 +8,7 @@ says otherwise, so a walk of ``steps`` steps ends the launch. Ctrl-C and SIGTERM
 to both; when the simulator ends, the planner is stopped, and when the planner ends, the
 simulator is. Exit status: 0 if both ended cleanly, 130 after Ctrl-C or SIGTERM, else the first
 non-zero status. ``--analyze`` then runs ``biped-gait-analyze`` on the new walk recording.
+``--live-view [PORT]`` has the simulator serve a Foxglove live view (``live_view``) on that port.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from pathlib import Path
 
 from ..arguments import OneLineParser
 from .environment import DISCOVERY_VARIABLE
+from .live_view import DEFAULT_PORT
 from .parameters import check_parameters_file
 
 PLANNER, SIMULATOR = "biped-gait-planner", "biped-gait-simulator"
@@ -35,6 +37,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--analyze", action="store_true", help="analyse the simulator's recording afterwards")
     parser.add_argument("--record-dir", type=Path, default=Path("bags"),
                         help="where the simulator records (to find the new recording for --analyze)")
+    parser.add_argument("--live-view", type=int, nargs="?", const=DEFAULT_PORT, metavar="PORT",
+                        help="the simulator serves a Foxglove live view on ws://127.0.0.1:PORT "
+                        f"(default {DEFAULT_PORT})")
     return parser
 
 
@@ -92,7 +97,8 @@ def main(argv: list[str] | None = None) -> int:
     ros_args = ["--params-file", str(args.config)] if args.config else []
     planner = start_entry(PLANNER, ros_args, own_session=True)
     # the file's own exit_when_done, if any, comes later and wins
-    simulator = start_entry(SIMULATOR, ["-p", "exit_when_done:=true", *ros_args], own_session=True)
+    live = [] if args.live_view is None else ["-p", "live_view:=true", "-p", f"live_view_port:={args.live_view}"]
+    simulator = start_entry(SIMULATOR, ["-p", "exit_when_done:=true", *live, *ros_args], own_session=True)
     try:
         while simulator.poll() is None and planner.poll() is None and not stopping:
             time.sleep(0.05)

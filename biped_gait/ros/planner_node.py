@@ -6,7 +6,8 @@
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
   transient-local, depth 1, so a late subscriber gets the latest one;
 - recording (parameter ``record``): every request with its response (PlanGaitCall messages on
-  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``.
+  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``, by a writer
+  thread: an exchange is queued as it is answered and serialized and written off the request path.
 
 A thin node: requests are converted and handed to the core (``GaitPlanner``); nothing a client
 sends can stop it (bad input gets ``success = false`` and a message; text from a request is
@@ -17,22 +18,24 @@ deleted) is one error line and the node keeps serving without recording.
 
 from __future__ import annotations
 
+import copy
 import math
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
-from dataclasses import replace
-
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
 from std_msgs.msg import Header
+from trajectory_msgs.msg import JointTrajectory
 
 from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
@@ -42,6 +45,7 @@ from ..core.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from ..core.planner import GaitPlanner
 from ..core.settings import DEFAULTS
 from ..core.text import clip
+from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
@@ -67,6 +71,24 @@ PARAMETERS = (
     Param("record", True, "record requests, responses and plans to MCAP (true/false)"),
     Param("record_dir", "bags", "directory of the recordings (path)"),
 )
+
+
+@dataclass(frozen=True)
+class CachedAnswer:
+    """A plan_gait answer kept for identical requests: its success and message, the plan, and
+    the plan without its trajectory's points (for ``omit_trajectory``)."""
+
+    success: bool
+    message: str
+    plan: GaitPlan
+    compact: GaitPlan
+
+
+def without_trajectory(plan: GaitPlan) -> GaitPlan:
+    """``plan`` with its trajectory's joint names but none of its points."""
+    compact = copy.copy(plan)
+    compact.trajectory = JointTrajectory(header=plan.trajectory.header, joint_names=plan.trajectory.joint_names)
+    return compact
 
 
 class InFlight:
@@ -102,18 +124,18 @@ class GaitPlannerNode(Node):
         self._default_params = value["default_params"]
         load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
-        self._cache: OrderedDict[tuple, PlanGait.Response] = OrderedDict()
+        self._cache: OrderedDict[tuple, CachedAnswer] = OrderedDict()
         self._cache_lock = threading.Lock()
         self._sequence = 0
         self._closing = threading.Event()
         self._in_flight = InFlight()
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
-        self.recorder: McapRecorder | None = None
+        self.recorder: BackgroundRecorder | None = None
         if value["record"]:
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
             try:
-                self.recorder = McapRecorder(value["record_dir"], f"planner_{stamp}")
+                self.recorder = BackgroundRecorder(McapRecorder(value["record_dir"], f"planner_{stamp}"))
                 self.get_logger().info(f"recording to {self.recorder.path}")
             except RecordingError as exc:
                 self.get_logger().error(f"{exc}; serving without recording")
@@ -124,6 +146,9 @@ class GaitPlannerNode(Node):
         # owns its planners (Pinocchio data are not shared between threads).
         self._service_group = MutuallyExclusiveCallbackGroup()
         self._action_group = MutuallyExclusiveCallbackGroup()
+        # The service's callbacks run in the spinning thread (a cached answer at once; a solve,
+        # tens of ms, there too), the action's on the executor's pool.
+        self.inline_callback_groups = (self._service_group,)
         queue = QoSProfile(depth=value["queue_depth"])  # reliable, volatile, like the services' default
         self.plan_service = self.create_service(
             PlanGait, "~/plan_gait", self._on_plan_gait, qos_profile=queue, callback_group=self._service_group
@@ -184,45 +209,54 @@ class GaitPlannerNode(Node):
             if cached is not None:
                 self._cache.move_to_end(key)
         if cached is not None:
-            response.success, response.plan = cached.success, cached.plan
+            response.success = cached.success
+            response.plan = cached.compact if request.omit_trajectory else cached.plan
             response.message = f"{cached.message} (cached)"
             return
         gait = self._planner(core_request.params, "service").plan(core_request)
-        response.plan = plan_msg(gait, self._header())
+        plan = plan_msg(gait, self._header())
         response.success = gait.admissible
         if gait.admissible:
             response.message = f"admissible (found by {gait.found})"
         else:
             reasons = "not admissible: " + "; ".join(gait.reasons)
             response.message = f"{reasons}; {gait.hint}" if gait.hint else reasons
+        answer = CachedAnswer(response.success, response.message, plan, without_trajectory(plan))
+        response.plan = answer.compact if request.omit_trajectory else plan
         with self._cache_lock:
-            self._cache[key] = PlanGait.Response(success=response.success, message=response.message, plan=response.plan)
+            self._cache[key] = answer
             while len(self._cache) > self.get_parameter("cache_size").value:
                 self._cache.popitem(last=False)
         if gait.admissible:
-            self._record(self.plan_publisher, response.plan)
+            self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
 
     def _record_call(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
-        """Record the exchange as a PlanGaitCall; a recording failure is logged, never raised."""
+        """Record the exchange as a PlanGaitCall, built and serialized on the recorder's thread
+        (off the request path); a recording failure is logged, never raised."""
         if self.recorder is None:
             return
         with self._cache_lock:
             self._sequence += 1
             sequence = self._sequence
-        fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
-        call = PlanGaitCall(header=self._header(), sequence=sequence, success=response.success,
-                            message=response.message, plan=response.plan, **fields)
-        self._record(self.call_recorder, call)
+        stamp = self.get_clock().now()
+        success, message, plan = response.success, response.message, response.plan
 
-    def _record(self, publisher: RecordedPublisher, msg) -> None:
-        """Publish (if live) and record ``msg``; a failure is logged (a recording failure once:
-        the recorder stops), never raised."""
+        def call() -> PlanGaitCall:
+            fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
+            return PlanGaitCall(header=Header(stamp=stamp.to_msg(), frame_id=PLAN_FRAME), sequence=sequence,
+                                success=success, message=message, plan=plan, **fields)
+
+        self._record(lambda: self.call_recorder.record_later(call, stamp.nanoseconds), self.call_recorder.topic)
+
+    def _record(self, action: Callable[[], None], topic: str) -> None:
+        """Publish or record (``action``); a failure is logged (a recording failure once: the
+        recorder stops), never raised."""
         try:
-            publisher.publish(msg)
+            action()
         except RecordingError as exc:
             self.get_logger().error(f"{exc}; serving without recording")
         except Exception as exc:  # noqa: BLE001  the answer matters more than its record
-            self.get_logger().error(f"publishing or recording on {publisher.topic} failed: {clip(repr(exc))}")
+            self.get_logger().error(f"publishing or recording on {topic} failed: {clip(repr(exc))}")
 
     def _on_optimize(self, goal_handle) -> OptimizeArmSwing.Result:
         with self._in_flight:
@@ -279,9 +313,10 @@ class GaitPlannerNode(Node):
         included); ``RecordingError`` if the file could not be finished."""
         self._closing.set()
         self._in_flight.wait_idle(CLOSE_WAIT)
-        if self.recorder is not None and not self.recorder.closed:
+        if self.recorder is not None:
             self.recorder.close()
-            rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
+            if not self.recorder.failure:
+                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
 
 
 def check_goal(goal: OptimizeArmSwing.Goal) -> None:

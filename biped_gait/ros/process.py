@@ -3,9 +3,14 @@ asks to exit, then let the node finalize (close its recording) before rclpy shut
 
 The spin is ``spin_once`` with a short timeout in a loop that checks a stop flag set by this
 module's own SIGINT/SIGTERM handlers (rclpy's are not installed): a plain ``spin`` can stay
-in ``rcl_wait`` after a signal. Stopping takes at most ``SPIN_PERIOD`` plus the node's
+in ``rcl_wait`` after a signal. Callbacks run on a pool of threads, but those of the callback
+groups a node names in ``inline_callback_groups``, which run in the spinning thread: handing a
+short callback (a cached service answer) to the pool costs more than the callback. Stopping takes at most ``SPIN_PERIOD`` plus the node's
 ``close``; callbacks still running then (a solve in flight) are not waited for beyond
-``GRACE`` s: the process ends without them, its recording already finished.
+``GRACE`` s. The process then ends at once (``os._exit``, output flushed), its recording
+finished and rclpy shut down: the interpreter's and the middleware's teardown after that (a
+second and more on a loaded machine: the middleware's exit handlers) would only delay the stop
+(Fast DDS clears a dead process's shared-memory files when the next participant starts).
 
 Bad input never starts the node: ``--help`` prints the parameters; unknown arguments, a ROS
 parameters file that is not a readable, small, well-formed YAML file, an argument rcl cannot
@@ -30,7 +35,9 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy
 import rclpy.logging
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+from rclpy.callback_groups import CallbackGroup
+from rclpy.executors import (ConditionReachedException, ExternalShutdownException, MultiThreadedExecutor,
+                             ShutdownException, TimeoutException)
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.utilities import remove_ros_args
@@ -114,9 +121,36 @@ def _stop_on_signals(stop: threading.Event) -> None:
         signal.signal(sig, handler)
 
 
+class InlineExecutor(MultiThreadedExecutor):
+    """A multi-threaded executor that runs the callbacks of the ``inline`` groups in the thread
+    that spins it, and the others on its pool, as ``MultiThreadedExecutor`` does."""
+
+    def __init__(self, inline: Sequence[CallbackGroup], num_threads: int) -> None:
+        super().__init__(num_threads=num_threads)
+        self._inline = set(inline)
+
+    def _spin_once_impl(self, timeout_sec=None, wait_condition=lambda: False) -> None:
+        if not self._inline:
+            return super()._spin_once_impl(timeout_sec, wait_condition)
+        try:
+            handler, entity, _node = self.wait_for_ready_callbacks(timeout_sec, None, wait_condition)
+        except (ExternalShutdownException, ShutdownException, TimeoutException, ConditionReachedException):
+            return None
+        if getattr(entity, "callback_group", None) in self._inline:
+            handler()
+            handler.result()  # raise its exception, if any
+            return None
+        self._executor.submit(handler)  # MultiThreadedExecutor's pool and futures
+        self._futures.append(handler)
+        for future in [f for f in self._futures if f.done()]:
+            self._futures.remove(future)
+            future.result()
+        return None
+
+
 def _spin(node: Node, stop: threading.Event, threads: int) -> MultiThreadedExecutor:
     """Spin ``node`` until ``stop``, the node's ``exit_requested`` event, or the context's end."""
-    executor = MultiThreadedExecutor(num_threads=threads)
+    executor = InlineExecutor(getattr(node, "inline_callback_groups", ()), num_threads=threads)
     executor.add_node(node)
     exit_requested = getattr(node, "exit_requested", threading.Event())
     try:
@@ -135,9 +169,8 @@ def _close(node: Node, program: str) -> None:
         rclpy.logging.get_logger(program).error(str(exc))
 
 
-def _end_threads(executor: MultiThreadedExecutor | None) -> bool:
-    """Let the executor's idle threads end and wait up to ``GRACE`` s for busy ones; False
-    if a callback still runs."""
+def _end_threads(executor: MultiThreadedExecutor | None) -> None:
+    """Let the executor's idle threads end and wait up to ``GRACE`` s for busy ones."""
     pool = getattr(executor, "_executor", None)  # rclpy's ThreadPoolExecutor (no public handle)
     if pool is not None:
         pool.shutdown(wait=False, cancel_futures=True)
@@ -145,7 +178,6 @@ def _end_threads(executor: MultiThreadedExecutor | None) -> bool:
     for thread in threading.enumerate():
         if thread is not threading.main_thread() and not thread.daemon:
             thread.join(max(0.0, deadline - time.monotonic()))
-    return not any(t.is_alive() and not t.daemon for t in threading.enumerate() if t is not threading.main_thread())
 
 
 def run_node(make_node: Callable[[], Node], program: str, threads: int = 4, args: list[str] | None = None,
@@ -153,8 +185,9 @@ def run_node(make_node: Callable[[], Node], program: str, threads: int = 4, args
     """Check the command line (``usage``: the entry point takes no arguments of its own, and
     answers ``--help``), create the node with ``make_node`` and spin it; returns the exit
     status: 2 for bad input, else the node's ``exit_status`` (0 if it has none). A node may
-    have ``exit_requested`` (a ``threading.Event``) to end the spin, and must have ``close()``.
-    If a callback still runs after the node is closed, the process ends here (``os._exit``)."""
+    have ``exit_requested`` (a ``threading.Event``) to end the spin and ``inline_callback_groups``
+    (run in the spinning thread), and must have ``close()``. Once rclpy has started, the process ends here (``os._exit`` with that status, see the
+    module): call it from an entry point, not from a process that goes on."""
     argv = list(sys.argv if args is None else args)
     status = check_command_line(program, argv, usage)
     if status is not None:
@@ -176,11 +209,10 @@ def run_node(make_node: Callable[[], Node], program: str, threads: int = 4, args
             status = status if status is not None else getattr(node, "exit_status", 0)
         if executor is not None:
             executor.shutdown(timeout_sec=0)
+            _end_threads(executor)  # before the node's handles go: a callback ending now still has them
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-    if not _end_threads(executor):
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(status)
-    return status
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(status)

@@ -17,6 +17,8 @@ LATCHED = QoSProfile(
 )
 STREAM = QoSProfile(depth=50)  # reliable, volatile: joint states, odometry, momentum, /tf
 EVENTS = QoSProfile(depth=100)  # reliable, volatile: gait events, recorded service calls
+# /clock: best effort, keep last 1, volatile, as rclcpp's ClockQoS (Gazebo, ros2 bag play)
+CLOCK = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
 
 
 def describe(profile: QoSProfile) -> list[dict]:

@@ -1,37 +1,62 @@
-"""Publishers whose messages are also recorded: each message is serialized once, and the same
-CDR bytes go to the publisher and to the MCAP recorder (with the topic's QoS in the recording,
-as rosbag2 writes it)."""
+"""Publishers whose messages are also recorded (and shown live, when a live view runs): each
+message is serialized once, and the same CDR bytes go to the publisher, to the recorder (with
+the topic's QoS and type hash in the recording, as rosbag2 writes them) and to the live view.
+A recorded-only message is serialized on the recorder's writer thread, off the caller's path."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
 from rclpy.node import Node
-from rclpy.qos import QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import serialize_message
 
+from ..recording.background import BackgroundRecorder
 from ..recording.schemas import type_name
-from ..recording.writer import McapRecorder
 from .qos import describe
+
+if TYPE_CHECKING:  # the live view's SDK is loaded only where a live view runs
+    from .live_view import LiveView
 
 
 class RecordedPublisher:
     """A publisher of ``msg_type`` on ``topic`` (``publish=False``: recorded only) whose
-    messages ``recorder`` (if any) also records."""
+    messages ``recorder`` (if any) records and ``live`` (if any) shows."""
 
-    def __init__(self, node: Node, msg_type: type, topic: str, qos: QoSProfile, recorder: McapRecorder | None,
-                 publish: bool = True) -> None:
+    def __init__(self, node: Node, msg_type: type, topic: str, qos: QoSProfile, recorder: BackgroundRecorder | None,
+                 publish: bool = True, live: "LiveView | None" = None) -> None:
         self.publisher = node.create_publisher(msg_type, topic, qos) if publish else None
         self.topic = self.publisher.topic_name if publish else node.resolve_topic_name(topic)
         self.recorder = recorder
+        self.live = live
         if recorder is not None:
             recorder.add_topic(self.topic, type_name(msg_type), describe(qos))
+        if live is not None:
+            live.add_topic(self.topic, type_name(msg_type), latched=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)
 
     def publish(self, msg, stamp_ns: int | None = None) -> None:
         """Publish ``msg`` and record it at ``stamp_ns`` (ns; default: now)."""
-        data = serialize_message(msg)
+        if self.publisher is None and self.live is None:
+            self.record_later(lambda: msg, stamp_ns)
+            return
+        self.publish_serialized(serialize_message(msg), stamp_ns)
+
+    def record_later(self, make: Callable[[], object], stamp_ns: int | None = None) -> None:
+        """Record the message ``make()`` returns, built and serialized on the recorder's writer
+        thread (for a recorded-only topic), at ``stamp_ns`` (ns; default: now)."""
+        if self.recorder is not None:
+            self.recorder.write(self.topic, lambda: serialize_message(make()), stamp_ns)
+
+    def publish_serialized(self, data: bytes, stamp_ns: int | None = None) -> None:
+        """Publish, record and show the CDR bytes ``data`` of one message, stamped ``stamp_ns``
+        (ns; default: now)."""
         if self.publisher is not None:
             self.publisher.publish(data)
         if self.recorder is not None:
             self.recorder.write(self.topic, data, stamp_ns)
+        if self.live is not None:
+            self.live.log(self.topic, data, stamp_ns)
 
     def subscription_count(self) -> int:
         """Subscribers matched to the live publisher (0 if recorded only)."""

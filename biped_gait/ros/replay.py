@@ -1,11 +1,19 @@
 """Replay of a recording (entry point ``biped-gait-replay``), like ``ros2 bag play``:
-``biped-gait-replay BAG [--rate R] [--loop] [--topics T1 T2 ...] [--start-paused]``.
+``biped-gait-replay BAG [--rate R] [--loop] [--clock [HZ]] [--topics T1 T2 ...] [--start-paused]``.
 
 BAG is a rosbag2 directory or a bare ``.mcap`` file. Each message is published on its topic,
 as the CDR bytes recorded, at ``start + (log time - first log time) / R`` on the monotonic
 clock, ``start`` being when playback begins: at once, or with ``--start-paused`` when the
 service ``~/resume`` (std_srvs/Trigger) is called, e.g. once subscribers see the publishers
-(DDS discovery between processes takes from milliseconds to seconds). Publishers have the
+(DDS discovery between processes takes from milliseconds to seconds). ``--clock`` publishes
+the playback time on ``/clock`` (rosgraph_msgs/Clock, HZ times per wall second, 40 by default
+as ``ros2 bag play``): the recording's log times, from its first message's, advancing at R
+(while paused: the first message's time), so that nodes with ``use_sim_time`` follow the
+recording. ``--loop`` plays the recording again and again, each time later by the recording's
+span (its duration and its shortest interval between messages), and restamps it forward: every
+``builtin_interfaces/Time`` in a message (header stamps, the transforms' stamps) that is not
+zero is moved by as much, so that time never goes back for a subscriber (the first pass
+publishes the recorded bytes as they are). Publishers have the
 message class of the recorded type and the QoS the recording's publishers offered
 (metadata.yaml; transient-local for ``/robot_description``). Topics whose type has no Python
 code here are skipped with one warning line; types are looked up only among the project's and
@@ -29,18 +37,24 @@ from pathlib import Path
 
 from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
+from builtin_interfaces.msg import Time as TimeMsg
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.utilities import remove_ros_args
+from rosgraph_msgs.msg import Clock
 from std_srvs.srv import Trigger
 
+from ..recording import topics
 from ..recording.reader import Bag, BagError, open_bag
 from ..arguments import OneLineParser
 from .process import run_node
+from .qos import CLOCK
 
 PROGRAM = "biped-gait-replay"
 NODE_NAME = "biped_gait_replay"
 DEFAULT_DEPTH = 100  # keep-last depth of topics recorded without QoS profiles
+CLOCK_RATE = 40.0  # Hz of wall time: /clock messages of --clock without a rate (as ros2 bag play)
 
 
 # The packages whose message classes a replay may use: the project's own interfaces and the
@@ -124,15 +138,45 @@ def select_topics(bag: Bag, wanted: list[str] | None) -> tuple[dict[str, tuple[t
     return outputs, skipped
 
 
+def shift_times(msg, offset_ns: int) -> None:
+    """Move every non-zero ``builtin_interfaces/Time`` inside ``msg`` (nested messages and
+    sequences of them included) ``offset_ns`` (ns) later, in place."""
+    for name in msg.get_fields_and_field_types():
+        value = getattr(msg, name)
+        items = value if isinstance(value, list) else [value]
+        for item in items:
+            if isinstance(item, TimeMsg):
+                if item.sec or item.nanosec:
+                    total = item.sec * 1_000_000_000 + item.nanosec + offset_ns
+                    item.sec, item.nanosec = total // 1_000_000_000, total % 1_000_000_000
+            elif hasattr(type(item), "get_fields_and_field_types"):
+                shift_times(item, offset_ns)
+
+
+def restamped(data: bytes, cls: type, offset_ns: int) -> bytes:
+    """The CDR bytes ``data`` of a ``cls`` message with its times ``offset_ns`` (ns) later."""
+    if not offset_ns:
+        return data
+    msg = deserialize_message(data, cls)
+    shift_times(msg, offset_ns)
+    return serialize_message(msg)
+
+
 class ReplayNode(Node):
     """Publishes the recorded messages of the selected topics at their recorded times / rate
     from a worker thread, started by the first spin; ends the process's spin at the end."""
 
     def __init__(self, bag: Bag, outputs: dict[str, tuple[type, QoSProfile]], skipped: list[str],
-                 rate: float, loop: bool, paused: bool) -> None:
+                 rate: float, loop: bool, paused: bool, clock_rate: float | None = None) -> None:
         super().__init__(NODE_NAME)
         self.bag, self.rate, self.loop = bag, rate, loop
         self.outputs = {topic: self.create_publisher(cls, topic, qos) for topic, (cls, qos) in outputs.items()}
+        self.classes = {topic: cls for topic, (cls, _) in outputs.items()}
+        self._began: float | None = None  # monotonic time (s) of the first message's playback
+        self._span = 0  # ns between a pass's first message and the next pass's
+        if clock_rate:
+            self._clock_publisher = self.create_publisher(Clock, topics.CLOCK, CLOCK)
+            self.create_timer(1.0 / clock_rate, self._publish_clock)
         if skipped:
             self.get_logger().warning(f"not replayed (message type not available here): {', '.join(skipped)}")
         self.failed = False
@@ -145,7 +189,8 @@ class ReplayNode(Node):
         self.create_service(Trigger, "~/resume", self._on_resume)
         count = sum(n for topic, (_, n) in bag.topics().items() if topic in self.outputs)
         self.get_logger().info(f"replaying {count} messages on {len(self.outputs)} topics from {bag.path} "
-                               f"at rate {rate:g}{', looping' if loop else ''}{', paused' if paused else ''}")
+                               f"at rate {rate:g}{', looping' if loop else ''}{', paused' if paused else ''}"
+                               f"{f', /clock at {clock_rate:g} Hz' if clock_rate else ''}")
         self._worker = threading.Thread(target=self._run, name="replay", daemon=True)
         self._starter = self.create_timer(0.0, self._start)
 
@@ -161,11 +206,22 @@ class ReplayNode(Node):
         self._resumed.set()
         return response
 
+    def playback_ns(self) -> int:
+        """The recording's time now playing (ns): its first message's until playback begins."""
+        if self._began is None:
+            return self.bag.start_ns
+        return self.bag.start_ns + round((time.monotonic() - self._began) * self.rate * 1e9)
+
+    def _publish_clock(self) -> None:
+        now = self.playback_ns()
+        self._clock_publisher.publish(Clock(clock=TimeMsg(sec=now // 1_000_000_000, nanosec=now % 1_000_000_000)))
+
     def _run(self) -> None:
         try:
             self._resumed.wait()
-            while not self._stop.is_set() and self._play() and self.loop:
-                pass
+            passes = 0
+            while not self._stop.is_set() and self._play(passes) and self.loop:
+                passes += 1
             if self._stop.is_set():
                 return
             self.get_logger().info(f"end of the recording: {self.published} messages published")
@@ -176,18 +232,27 @@ class ReplayNode(Node):
         finally:
             self.exit_requested.set()  # end the spin: the process exits
 
-    def _play(self) -> bool:
-        """Publish the recording once, each message when it is due: the start (monotonic clock,
-        s; when the first message has been read) plus its log time's offset from the recording's
-        first message over the rate. False if stopped."""
-        start = None
+    def _play(self, index: int) -> bool:
+        """Publish the recording once, its ``index``-th pass (0: the first), each message when
+        it is due: the start (monotonic clock, s; when the first message of the first pass has
+        been read) plus its log time's offset from the recording's first message, plus
+        ``index`` spans, over the rate; restamped by ``index`` spans. False if stopped."""
+        offset = index * self._span
+        last, gap = None, 0
         for channel, message in self.bag.messages(list(self.outputs)):
-            start = time.monotonic() if start is None else start
-            due = start + (message.log_time - self.bag.start_ns) * 1e-9 / self.rate
+            if self._began is None:
+                self._began = time.monotonic()
+            due = self._began + (message.log_time - self.bag.start_ns + offset) * 1e-9 / self.rate
             if self._stop.wait(max(0.0, due - time.monotonic())):
                 return False
-            self.outputs[channel.topic].publish(message.data)
+            topic = channel.topic
+            self.outputs[topic].publish(restamped(message.data, self.classes[topic], offset))
             self.published += 1
+            if last is not None and message.log_time > last:
+                gap = min(gap, message.log_time - last) if gap else message.log_time - last
+            last = message.log_time
+        if index == 0 and last is not None:
+            self._span = last - self.bag.start_ns + (gap or 1)
         return True
 
     @property
@@ -208,7 +273,10 @@ def _parser() -> OneLineParser:
     parser.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 directory or .mcap file")
     parser.add_argument("--rate", type=float, default=1.0, metavar="R",
                         help="speed factor: log-time differences are divided by it")
-    parser.add_argument("--loop", action="store_true", help="replay again and again until stopped")
+    parser.add_argument("--loop", action="store_true", help="replay again and again until stopped, each pass "
+                        "restamped later by the recording's span")
+    parser.add_argument("--clock", type=float, nargs="?", const=CLOCK_RATE, metavar="HZ",
+                        help=f"publish the playback time on /clock, HZ times per second (default {CLOCK_RATE:g})")
     parser.add_argument("--topics", nargs="+", metavar="TOPIC", help="replay only these topics")
     parser.add_argument("--start-paused", action="store_true", help="wait for a call of the ~/resume service")
     return parser
@@ -222,14 +290,16 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(remove_ros_args([PROGRAM, *argv])[1:])
     if not (math.isfinite(args.rate) and args.rate > 0):
         parser.error(f"--rate must be a positive number, got {args.rate:g}")
+    if args.clock is not None and not (math.isfinite(args.clock) and args.clock > 0):
+        parser.error(f"--clock must be a positive rate (Hz), got {args.clock:g}")
     try:
         bag = open_bag(args.bag)
         outputs, skipped = select_topics(bag, args.topics)
     except BagError as exc:
         print(f"{PROGRAM}: error: {exc}", file=sys.stderr)
         return 2
-    return run_node(lambda: ReplayNode(bag, outputs, skipped, args.rate, args.loop, args.start_paused), PROGRAM,
-                    threads=2, args=[PROGRAM, *argv])
+    return run_node(lambda: ReplayNode(bag, outputs, skipped, args.rate, args.loop, args.start_paused, args.clock),
+                    PROGRAM, threads=2, args=[PROGRAM, *argv])
 
 
 if __name__ == "__main__":

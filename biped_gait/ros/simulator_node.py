@@ -6,13 +6,19 @@ request to the planner's ``plan_gait`` service (``plan_source: service``, with t
 ``step_length``, ``period``, ``arm_amplitude``, ``mode``; ``arm_amplitude < 0`` asks the
 planner's ``optimize_arm_swing`` action for the optimal amplitude first).
 
-Topics (stamps are the walk's simulated time, started at the node's clock):
-``/joint_states`` (sensor_msgs/JointState, URDF joint names), ``/odom`` (nav_msgs/Odometry,
-pelvis ``base_link`` in ``world``), ``/angular_momentum`` (biped_gait_interfaces/AngularMomentum),
-``/gait_events`` (biped_gait_interfaces/GaitEvent), ``/gait_phase`` (GaitPhase: which foot
-stands, the step, the double supports), ``/tf`` (the URDF's moving joints and the pelvis in
-``world``), and transient-local ``/robot_description`` (std_msgs/String) and ``/tf_static``. The
-recording (MCAP, rosbag2 directory under ``record_dir``) holds the same bytes as were published.
+Topics (stamps are the walk's simulated time, started at the node's clock: the wall clock, or
+with ``use_sim_time`` the simulated time, from 0): ``/clock`` (rosgraph_msgs/Clock, that time,
+before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, URDF joint
+names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
+(biped_gait_interfaces/AngularMomentum), ``/gait_events`` (biped_gait_interfaces/GaitEvent),
+``/gait_phase`` (biped_gait_interfaces/GaitPhase: which foot stands, the step, the double
+supports), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
+``/robot_description`` (std_msgs/String) and ``/tf_static``. The recording (MCAP, rosbag2
+directory under ``record_dir``, handed over by a thread to a recorder process of its own) holds
+the same bytes as were published, and so does the optional Foxglove live view
+(``live_view``). Each step's samples come from the walk as arrays and their messages
+are serialized at once (``walk_messages``). Controls: ``~/pause``, ``~/resume``, ``~/reset`` and
+the step counter ``~/iterations`` (``sim_controls``).
 
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Speed: ``/cmd_vel``
@@ -41,6 +47,7 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
 from geometry_msgs.msg import Twist
+import numpy as np
 from rclpy.action import ActionClient
 from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
@@ -61,18 +68,23 @@ from ..core.settings import DEFAULTS
 from ..core.steering import DEFAULT_RATE
 from ..core.text import clip
 from ..core.transitions import MAX_CHANGE, SPEED_RULES
-from ..core.walk import CouldNotStart, Fell, Finished, Sample, Touchdown, Walk
+from ..core.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
 from ..recording import topics
-from ..recording.writer import DEFAULT_CHUNK_SIZE, McapRecorder, RecordingError
+from ..recording.background import BackgroundRecorder
+from ..recording.recorder_process import RecorderProcess
+from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError
 from .conversions import MODE_TO_MSG, orbit_from_msg
 from .gait_phase import GaitPhases
+from .live_view import DEFAULT_PORT, LiveView
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
 from .push_service import SCRIPT_FORMAT, PushScheduler, parse_pushes
 from .recorded import RecordedPublisher
+from .sim_clock import SimClock
+from .sim_controls import SimControls
 from .speed_command import SpeedCommand
-from .walk_messages import event_msg, joint_state_msg, momentum_msg, odometry_msg, stamp_msg, tf_msg
+from .walk_messages import SampleMessages, event_msg, stamp_msg, tf_msg
 
 NODE_NAME = "biped_gait_simulator"
 LOG_PERIOD = 5.0  # s between the log lines of a long wait
@@ -111,6 +123,9 @@ PARAMETERS = (
     Param("exit_when_done", False, "end the process when the walk ends (true/false; the launcher sets it)"),
     Param("wait_for_subscribers", 0, "start walking once /joint_states has this many subscribers (count; "
           "discovery can take seconds)", 0, 100),
+    Param("live_view", False, "serve a Foxglove WebSocket live view of the walk (true/false)"),
+    Param("live_view_host", "127.0.0.1", "address the live view's server binds (host; 0.0.0.0: every interface)"),
+    Param("live_view_port", DEFAULT_PORT, "port of the live view's server (TCP port; 0: any free one)", 0, 65535),
     Param("wait_timeout", 60.0, "how long to wait for the planner's service or action, a plan on the topic, or "
           "the subscribers (s); 0: no limit", 0.0, 86400.0),
 )
@@ -137,19 +152,23 @@ class SimulatorNode(Node):
         self._latest_plan: GaitPlan | None = None
         self._plan_ready = threading.Event()
         self._stop = threading.Event()
-        self.finished = threading.Event()
         self.exit_requested = threading.Event()
         self.failed = False
-        self.recorder: McapRecorder | None = None
+        self.recorder: BackgroundRecorder | None = None
         self._recording_failure = ""
         if value["record"]:
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
             try:
-                self.recorder = McapRecorder(value["record_dir"], f"walk_{stamp}", chunk_size=value["chunk_size"])
+                self.recorder = BackgroundRecorder(
+                    RecorderProcess(value["record_dir"], f"walk_{stamp}", chunk_size=value["chunk_size"]))
                 self.get_logger().info(f"recording to {self.recorder.bag_dir}")
             except RecordingError as exc:
                 self._recording_failure = str(exc)
-        publisher = lambda msg_type, topic, qos: RecordedPublisher(self, msg_type, topic, qos, self.recorder)  # noqa: E731
+        self.live = self._start_live_view() if value["live_view"] else None
+
+        def publisher(msg_type: type, topic: str, qos) -> RecordedPublisher:
+            return RecordedPublisher(self, msg_type, topic, qos, self.recorder, live=self.live)
+
         self.pub_joints = publisher(JointState, topics.JOINT_STATES, STREAM)
         self.pub_odom = publisher(Odometry, topics.ODOM, STREAM)
         self.pub_momentum = publisher(AngularMomentum, topics.ANGULAR_MOMENTUM, STREAM)
@@ -161,12 +180,29 @@ class SimulatorNode(Node):
         self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"])
         self.create_subscription(Twist, topics.CMD_VEL, self.speed.on_twist, 10)
         self.create_service(Push, "~/push", self._on_push, callback_group=self._group)
+        self.sampled = {topics.JOINT_STATES: self.pub_joints, topics.ODOM: self.pub_odom,
+                        topics.ANGULAR_MOMENTUM: self.pub_momentum, topics.TF: self.pub_tf}
+        self.clock = SimClock(self)
+        self.controls = SimControls(self, self._group)
+        self._messages: SampleMessages | None = None  # the sampled topics' templates, made with the first walk
         if self.source == "topic":
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
         self.optimize_client = ActionClient(self, OptimizeArmSwing, value["optimize_action"], callback_group=self._group)
         self._worker = threading.Thread(target=self._run, name="walker", daemon=True)
         self._worker.start()
+
+    def _start_live_view(self) -> LiveView | None:
+        """The Foxglove live view on ``live_view_host``:``live_view_port``; None (and one error
+        line) if its server cannot start (the port taken): the walk goes on without it."""
+        host, port = self.value["live_view_host"], self.value["live_view_port"]
+        try:
+            live = LiveView(host, port)
+        except Exception as exc:  # noqa: BLE001  the SDK's error for a port taken, an address not here
+            self.get_logger().error(f"live view not started on {host}:{port}: {clip(str(exc))}")
+            return None
+        self.get_logger().info(f"live view: open Foxglove on ws://{host}:{live.port}")
+        return live
 
     @property
     def exit_status(self) -> int:
@@ -217,8 +253,9 @@ class SimulatorNode(Node):
                 raise NoPlan(f"arm-swing optimization failed: {result.message}")
             alpha = result.alpha_opt
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
+        # the walk needs the plan's boundary states, not its sampled trajectory
         request = PlanGait.Request(step_length=value["step_length"], period=value["period"], arm_amplitude=alpha,
-                                   mode=mode, params=value["params"])
+                                   mode=mode, params=value["params"], omit_trajectory=True)
         response = self._call_plan(request)
         if not response.success:
             raise NoPlan(f"the planner refused: {response.message}")
@@ -291,7 +328,6 @@ class SimulatorNode(Node):
                 self.failed = True
                 self.get_logger().error(f"walk aborted: {clip(repr(exc))}")
         finally:
-            self.finished.set()
             if self.value["exit_when_done"]:
                 self.exit_requested.set()
 
@@ -307,6 +343,8 @@ class SimulatorNode(Node):
         self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp, clip(reason, 1000)))
 
     def _walk(self, plan: GaitPlan, params: str) -> None:
+        """Walk ``plan``, and again from its start after each reset, until the walk ends (with
+        ``exit_when_done``) or the node stops. Simulated time runs on across resets."""
         wanted = self.value["wait_for_subscribers"]
         try:
             self._wait_until(lambda: self.pub_joints.subscription_count() >= wanted,
@@ -314,67 +352,111 @@ class SimulatorNode(Node):
         except NoPlan as exc:
             self._not_started(str(exc))
             return
-        steer = self.value["reaim"] and self.value["recovery"] == "momentum"
-        walk = Walk(replace(orbit_from_msg(plan), params=params), self.rate, self.steps, reaim=self.value["reaim"],
-                    momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step)
-        if walk.walker is not None:
-            self.speed.start(walk.walker, params or None)
-            self.pushes.start()
+        orbit = replace(orbit_from_msg(plan), params=params)
         start_ns = self.get_clock().now().nanoseconds
-        if walk.world is not None:
-            stamp = stamp_msg(start_ns)
-            self.pub_description.publish(String(data=walk.world.urdf), start_ns)
-            self.pub_tf_static.publish(tf_msg(walk.world.static_transforms(), stamp), start_ns)
+        pacer = Pacer(self.rtf)
         self.get_logger().info(
             f"walking L = {plan.step_length:g} m, T = {plan.period:g} s, alpha = {math.degrees(plan.arm_amplitude):.2f} deg "
-            f"({walk.orbit.mode}), {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor {self.rtf:g}")
-        pacer = Pacer(self.rtf)
+            f"({orbit.mode}), {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor {self.rtf:g}")
         try:
-            self._run_walk(walk, pacer, start_ns)
+            while True:
+                self.controls.take_reset()
+                ended = self._walk_once(orbit, start_ns, pacer)
+                if self._stopping() or not ended and not self.controls.reset_requested():
+                    return
+                if ended:
+                    held = time.monotonic()
+                    self.pushes.stop("the walk ended")
+                    if self.value["exit_when_done"] or not self.controls.wait_for_reset(self._stop):
+                        return
+                    pacer.delay(time.monotonic() - held)
+                self.failed = False
+                self.get_logger().info(f"reset: walking again from the plan's start at t = "
+                                       f"{self.controls.iterations / self.rate:.3f} s")
         finally:
             self.pushes.stop("the walk ended")
 
-    def _run_walk(self, walk: Walk, pacer: Pacer, start_ns: int) -> None:
-        for item in walk:
-            if isinstance(item, Sample):
-                if not pacer.wait(item.t, self._stop) or not self.context.ok():
-                    return
-                self._publish_sample(item, start_ns)
-                self.phases.sample(item.step, item.stance_side, item.t, start_ns)
+    def _walk_once(self, orbit: PlannedOrbit, start_ns: int, pacer: Pacer) -> bool:
+        """One walk of ``orbit`` from its start, at simulated time ``iterations / rate`` after
+        ``start_ns`` (ns); True if it ended (finished or fell, or could not start), False if
+        it was stopped or reset."""
+        held = time.monotonic()
+        steer = self.value["reaim"] and self.value["recovery"] == "momentum"
+        walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
+                    momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step)
+        if walk.world is not None and self._messages is None:
+            self._messages = SampleMessages(walk.world.link_frames)
+        if walk.walker is not None:
+            self.speed.start(walk.walker, orbit.params or None)
+            self.pushes.start()
+            self.phases.restart()
+        pacer.delay(time.monotonic() - held)  # the pacing starts with the walk's first sample
+        offset = self.controls.iterations / self.rate  # s of simulated time before this walk
+        base_ns = start_ns + round(offset * 1e9)  # the walk's t = 0
+        if walk.world is not None and not self.controls.can_reset:  # the first walk: the latched topics
+            self.pub_description.publish(String(data=walk.world.urdf), base_ns)
+            self.pub_tf_static.publish(tf_msg(walk.world.static_transforms(), stamp_msg(base_ns)), base_ns)
+            self.controls.can_reset = True
+        for item in walk.batches():
+            if isinstance(item, StepSamples):
+                if not self._publish_step(item, base_ns, offset, pacer):
+                    return False
             elif isinstance(item, AppliedPush):
                 text = f"push of {item.impulse.tolist()} N s on the trunk in step {item.step} at t = {item.t:.4f} s"
                 self.get_logger().info(text)
-                self._event(GaitEvent.PUSH, item.step, item.stance_side, item.time_in_step, start_ns, item.t, text)
+                self._event(GaitEvent.PUSH, item.step, item.stance_side, item.time_in_step, base_ns, item.t, text)
             elif isinstance(item, Touchdown):
-                self._event(GaitEvent.TOUCHDOWN, item.step, item.next_stance_side, item.t_step, start_ns, item.t,
+                self._event(GaitEvent.TOUCHDOWN, item.step, item.next_stance_side, item.t_step, base_ns, item.t,
                             f"touchdown of step {item.step}", item)
-                self.phases.touchdown(item.step, item.t, start_ns)
+                self.phases.touchdown(item.step, item.t, base_ns)
             elif isinstance(item, Fell):
                 self.failed = True
                 self.get_logger().error(f"the robot fell in step {item.step}: {item.reason}")
-                self._event(GaitEvent.FALL, item.step, item.stance_side, item.time_in_step, start_ns, item.t, item.reason)
+                self._event(GaitEvent.FALL, item.step, item.stance_side, item.time_in_step, base_ns, item.t, item.reason)
             elif isinstance(item, Finished):
-                self._event(GaitEvent.FINISHED, item.steps, item.stance_side, 0.0, start_ns, item.t,
+                self._event(GaitEvent.FINISHED, item.steps, item.stance_side, 0.0, base_ns, item.t,
                             f"walked {item.steps} steps")
                 wall = pacer.elapsed()
-                self.get_logger().info(f"walk finished: {item.steps} steps, {item.t:.3f} s simulated in {wall:.3f} s "
-                                       f"wall time (real-time factor {item.t / wall:.2f})")
+                self.get_logger().info(f"walk finished: {item.steps} steps, {offset + item.t:.3f} s simulated in "
+                                       f"{wall:.3f} s wall time (real-time factor {(offset + item.t) / wall:.2f})")
             elif isinstance(item, CouldNotStart):
                 self._not_started(item.reason)
+        return True
 
     # Publishing ---------------------------------------------------------------------------
-    def _publish_sample(self, sample: Sample, start_ns: int) -> None:
-        stamp_ns = start_ns + round(sample.t * 1e9)
-        stamp = stamp_msg(stamp_ns)
-        world = sample.world
-        self.pub_joints.publish(joint_state_msg(world, stamp), stamp_ns)
-        self.pub_odom.publish(odometry_msg(world, stamp), stamp_ns)
-        self.pub_momentum.publish(momentum_msg(world, stamp, sample.step, sample.stance_side), stamp_ns)
-        self.pub_tf.publish(tf_msg(world.link_transforms, stamp), stamp_ns)
+    def _publish_step(self, step: StepSamples, base_ns: int, offset: float, pacer: Pacer) -> bool:
+        """Publish (and record, and show) the samples of one step, each when the pacing releases
+        it, with /clock first; False if stopped or reset before the last."""
+        first = step.samples[0]
+        t = step.t
+        stamps_ns = base_ns + np.round(t * 1e9).astype(np.int64)
+        rows = self._messages.encode(step.world, stamps_ns, first.step, first.stance_side)
+        outputs = [(self.sampled[topic].publish_serialized, [row.tobytes() for row in encoded])
+                   for topic, encoded in rows.items()]
+        clock = [row.tobytes() for row in self.clock.encode(stamps_ns)]
+        controls, stop, live, paced = self.controls, self._stop, self.live, pacer.factor > 0
+        if not self.context.ok():  # shut down under us: a stop (the stop flag says so at each sample)
+            return False
+        for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
+            if controls.paused:
+                held = time.monotonic()
+                controls.hold(stop)
+                pacer.delay(time.monotonic() - held)
+            if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
+                return False
+            self.clock.publish(clock[k])
+            if k == 0:
+                self.phases.sample(first.step, first.stance_side, first.t, base_ns)
+            for publish, data in outputs:
+                publish(data[k], stamp)
+            if live is not None:
+                live.time(stamp)
+            controls.iterations += 1
+        return True
 
-    def _event(self, kind: int, step: int, side: str, time_in_step: float, start_ns: int, t: float, message: str,
+    def _event(self, kind: int, step: int, side: str, time_in_step: float, base_ns: int, t: float, message: str,
                touchdown: Touchdown | None = None) -> None:
-        stamp_ns = start_ns + round(t * 1e9)
+        stamp_ns = base_ns + round(t * 1e9)
         self.pub_events.publish(event_msg(kind, step, side, time_in_step, stamp_msg(stamp_ns), message, touchdown),
                                 stamp_ns)
 
@@ -383,13 +465,16 @@ class SimulatorNode(Node):
         ``RecordingError`` if the file could not be finished (the walk then counts as failed)."""
         self._stop.set()
         self._worker.join(timeout=1.5)
-        if self.recorder is not None and not self.recorder.closed:
+        if self.live is not None:
+            self.live.close()
+        if self.recorder is not None:
             try:
                 self.recorder.close()
             except RecordingError:
                 self.failed = True
                 raise
-            rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.bag_dir}")
+            if not self.recorder.failure:
+                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.bag_dir}")
 
 
 def main(args: list[str] | None = None) -> int:

@@ -58,6 +58,9 @@ class NativeFlow {
       nqd_.resize(steps_ + 1, n);
       nqdd_.resize(steps_ + 1, n);
     }
+    long evaluations = static_cast<long>(steps_) * stages;
+    {
+    py::gil_scoped_release release;  // no Python object is touched: other threads run meanwhile
     for (int step = 0; step < steps_; ++step) {
       for (int i = 0; i < stages; ++i) {
         y = z;
@@ -73,15 +76,15 @@ class NativeFlow {
       for (int i = 0; i < stages; ++i)
         if (b_(i) != 0.0) z.noalias() += (h * b_(i)) * stage[i];
     }
-    long evaluations = static_cast<long>(steps_) * stages;
-    py::object nodes = py::none();
     if (keep_nodes) {
       nq_.row(steps_) = z.col(0).head(n).transpose();
       nqd_.row(steps_) = z.col(0).tail(n).transpose();
       nqdd_.row(steps_) = acceleration(z.col(0).head(n), z.col(0).tail(n)).transpose();
       evaluations += 1;
-      nodes = py::make_tuple(nq_, nqd_, nqdd_);
     }
+    }
+    py::object nodes = py::none();
+    if (keep_nodes) nodes = py::make_tuple(nq_, nqd_, nqdd_);
     py::object sens = py::none();
     if (k) sens = py::cast(Matrix(z.rightCols(k)));
     return py::make_tuple(Vector(z.col(0).head(n)), Vector(z.col(0).tail(n)), sens, evaluations, nodes);

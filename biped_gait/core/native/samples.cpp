@@ -67,6 +67,7 @@ class NativeSamples {
     RowMatrix qdd(n, single_.nv), grf(n, 4);
     Vector height(n), yaw(n), lowest(n);
     Vector x = Vector::Zero(extended_.nq), xd = Vector::Zero(extended_.nv), xdd = Vector::Zero(extended_.nv);
+    py::gil_scoped_release release;  // no Python object is touched in the loop: other threads run meanwhile
     for (int i = 0; i < n; ++i) {
       const Vector qi = q.row(i).transpose(), qdi = qd.row(i).transpose();
       qdd.row(i) = pinocchio::aba(single_, single_data_, qi, qdi, tau_).transpose();
@@ -80,6 +81,7 @@ class NativeSamples {
       height[i] = pinocchio::updateFramePlacement(single_, single_data_, swing_tip_).translation()[2];
       lowest[i] = lowest_link();
     }
+    py::gil_scoped_acquire acquire;
     return py::make_tuple(qdd, grf, height, yaw, lowest);
   }
 
@@ -105,6 +107,7 @@ class NativeSamples {
     RowMatrix position(n, 3), orientation(n, 4), velocity(n, 6), com(n, 3), momentum(n, 3), angular(n, 3);
     const Eigen::Vector3d mirror(1.0, mirrored ? -1.0 : 1.0, 1.0);
     Vector x = Vector::Zero(extended_.nq), xd = Vector::Zero(extended_.nv);
+    py::gil_scoped_release release;  // no Python object is touched in the loop: other threads run meanwhile
     for (int i = 0; i < n; ++i) {
       x.tail(single_.nq) = q.row(i).transpose();
       xd.tail(single_.nv) = qd.row(i).transpose();
@@ -118,6 +121,7 @@ class NativeSamples {
       com.row(i) = extended_data_.com[0].transpose();
       momentum.row(i) = extended_data_.hg.linear().transpose();
     }
+    py::gil_scoped_acquire acquire;
     return py::make_tuple(position, orientation, velocity, com, momentum, angular);
   }
 
@@ -176,6 +180,7 @@ class NativePlacements {
     if (q.cols() != model_.nq) throw std::invalid_argument("q must be an n x nq array");
     const int n = static_cast<int>(q.rows()), joints = static_cast<int>(model_.njoints) - 1;
     RowMatrix translation(n, 3 * joints), orientation(n, 4 * joints);
+    py::gil_scoped_release release;  // no Python object is touched in the loop: other threads run meanwhile
     for (int i = 0; i < n; ++i) {
       pinocchio::forwardKinematics(model_, data_, q.row(i).transpose());
       for (int j = 0; j < joints; ++j) {
@@ -184,6 +189,7 @@ class NativePlacements {
         orientation.block<1, 4>(i, 4 * j) = quaternion(placement.rotation()).transpose();
       }
     }
+    py::gil_scoped_acquire acquire;
     return py::make_tuple(translation, orientation);
   }
 

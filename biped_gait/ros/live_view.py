@@ -1,0 +1,85 @@
+"""A live view of the walk in Foxglove: a Foxglove WebSocket server (foxglove-sdk, MIT) that
+serves the topics it is given with the same CDR bytes and ``ros2msg`` schemas as the recording,
+and the simulated time (the server's time capability). Foxglove, connected to
+``ws://HOST:PORT``, shows the robot from ``/robot_description`` (a URDF layer of the 3D panel
+on that topic) moving with ``/tf`` and ``/tf_static``, and plots ``/joint_states`` and
+``/angular_momentum`` as the robot walks.
+
+Latched topics (transient-local: the robot description, the static transforms) are sent again
+to each client that subscribes to them, as a late ROS subscriber would get them. The server
+binds ``127.0.0.1`` unless told otherwise; it runs on threads of its own (Rust), and logging a
+message to a channel nobody subscribes to costs next to nothing. The SDK is imported when a live
+view starts: the nodes that show nothing do not load it (nor its runtime's exit hook).
+"""
+
+from __future__ import annotations
+
+import time
+
+from ..recording.schemas import schema_text
+
+DEFAULT_PORT = 8765  # Foxglove's default for a WebSocket connection
+
+
+class LiveView:
+    """A Foxglove WebSocket server on ``host``:``port`` (0: any free port, see ``port``)."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, name: str = "biped_gait") -> None:
+        import foxglove
+        from foxglove.websocket import Capability
+
+        self._foxglove = foxglove
+        self._context = foxglove.Context()
+        self._channels: dict[str, object] = {}  # topic -> its foxglove.Channel
+        self._latched: dict[str, tuple[bytes, int]] = {}  # topic -> its latest message and stamp (ns)
+        self.server = foxglove.start_server(name=name, host=host, port=port, context=self._context,
+                                            capabilities=[Capability.Time], server_listener=_listener(self))
+
+    @property
+    def port(self) -> int:
+        """The port the server listens on."""
+        return self.server.port
+
+    def add_topic(self, topic: str, datatype: str, latched: bool = False) -> None:
+        """Serve ``topic`` of type ``datatype`` ('pkg/msg/Type', CDR); ``latched``: send its
+        latest message to each new subscriber."""
+        if topic in self._channels:
+            return
+        foxglove = self._foxglove
+        schema = foxglove.Schema(name=datatype, encoding="ros2msg", data=schema_text(datatype).encode())
+        self._channels[topic] = foxglove.Channel(topic, schema=schema, message_encoding="cdr", context=self._context)
+        if latched:
+            self._latched[topic] = (b"", 0)
+
+    def log(self, topic: str, data: bytes, stamp_ns: int | None = None) -> None:
+        """Send the CDR bytes of one message on ``topic`` to its subscribers, stamped ``stamp_ns``
+        (ns; default: now)."""
+        stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
+        if topic in self._latched:
+            self._latched[topic] = (data, stamp)
+        self._channels[topic].log(data, log_time=stamp)
+
+    def time(self, stamp_ns: int) -> None:
+        """Tell the clients the current (simulated) time (ns)."""
+        self.server.broadcast_time(int(stamp_ns))
+
+    def resend_latched(self, topic: str) -> None:
+        """Send ``topic``'s latest message again if it is latched (a client just subscribed)."""
+        data, stamp = self._latched.get(topic, (b"", 0))
+        if data:
+            self._channels[topic].log(data, log_time=stamp)
+
+    def close(self) -> None:
+        """Stop the server (its clients are disconnected)."""
+        self.server.stop()
+
+
+def _listener(view: LiveView):
+    """The server's callbacks: a client's subscription to a latched topic gets its latest message."""
+    from foxglove.websocket import ServerListener
+
+    class Listener(ServerListener):
+        def on_subscribe(self, _client, channel) -> None:
+            view.resend_latched(channel.topic)
+
+    return Listener()

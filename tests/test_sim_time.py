@@ -1,0 +1,203 @@
+"""Time, frames, controls and the live view as ROS users expect them, over Fast DDS: /clock
+advances with the simulation and nodes with use_sim_time (a subscriber's, the planner) follow
+it; /tf is received live and is what was recorded, byte for byte; the recording's metadata
+opens in rosbags with every topic's QoS and the type hashes rclpy reports; pause, resume and
+reset; the Foxglove live view answers a plain websocket client."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
+
+import asyncio
+import json
+import re
+import struct
+import time
+from pathlib import Path
+
+import numpy as np
+import rclpy
+import websockets
+import yaml
+from mcap.reader import make_reader
+from nav_msgs.msg import Odometry
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message
+from rosbags.highlevel import AnyReader
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+from std_msgs.msg import String, UInt64
+from std_srvs.srv import Trigger
+from tf2_msgs.msg import TFMessage
+
+from biped_gait.ros.client import ClientSide
+from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
+from biped_gait_interfaces.srv import PlanGait
+
+from .ros_helpers import start_node, start_simulator, stop_node
+from .test_replay import same_messages
+
+pytestmark = pytest.mark.ros
+
+PLANNER = "sim_time_test_planner"
+BEST_EFFORT = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+
+def ns(stamp) -> int:
+    return stamp.sec * 1_000_000_000 + stamp.nanosec
+
+
+def simulator(where: Path, *params: str):
+    return start_simulator(where, PLANNER, *params)
+
+
+@pytest.fixture(scope="module")
+def planner_node(tmp_path_factory):
+    """A planner on simulated time (its plans' stamps follow /clock)."""
+    where = tmp_path_factory.mktemp("sim_time_planner")
+    proc = start_node("biped-gait-planner", "-r", f"__node:={PLANNER}", "-p", "record:=false", "-p", "use_sim_time:=true",
+                      cwd=where)
+    yield proc
+    assert stop_node(proc) == 0
+
+
+@pytest.fixture
+def side():
+    client_side = ClientSide("sim_time_listener")
+    yield client_side
+    client_side.close()
+
+
+def test_clock_tf_and_the_recording_as_users_expect(planner_node, side, tmp_path):
+    """Two steps in real time on simulated time from 0: /clock, a use_sim_time node's clock,
+    /tf live against the recording, the metadata in rosbags, the planner's stamps."""
+    user = rclpy.create_node("sim_time_user", context=side.context,
+                             parameter_overrides=[Parameter("use_sim_time", value=True)])
+    side.executor.add_node(user)
+    clocks, tf, joints, seen_by_user = [], [], [], []
+    side.node.create_subscription(Clock, "/clock", lambda m: clocks.append(ns(m.clock)), BEST_EFFORT)
+    side.node.create_subscription(TFMessage, "/tf", lambda data: tf.append((data, 0)), QoSProfile(depth=5000), raw=True)
+    side.node.create_subscription(JointState, "/joint_states", lambda m: joints.append(ns(m.header.stamp)),
+                                  QoSProfile(depth=5000))
+    user.create_subscription(JointState, "/joint_states", lambda _m: seen_by_user.append(user.get_clock().now().nanoseconds),
+                             QoSProfile(depth=5000))
+    proc = simulator(tmp_path, "steps:=2", "real_time_factor:=1.0", "exit_when_done:=true", "use_sim_time:=true",
+                     "wait_for_subscribers:=2")
+    side.wait(lambda: proc.poll() is not None, 120.0)
+    settle = time.monotonic() + 0.5
+    side.wait(lambda: time.monotonic() > settle)
+    assert proc.returncode == 0, (tmp_path / "biped-gait-simulator.log").read_text()
+    # /clock: simulated time from 0, increasing, one per sample, the samples' stamps
+    assert len(clocks) > 300 and np.all(np.diff(clocks) > 0)
+    assert 0 <= clocks[0] < 10_000_000 and 0.85e9 < clocks[-1] < 0.95e9  # 2 steps of 0.45 s
+    assert set(joints) <= set(clocks)
+    # a node with use_sim_time reads simulated time, not the wall clock
+    assert seen_by_user and 0 < seen_by_user[-1] < 1e9
+    # the planner on simulated time stamps its plans with it
+    client = side.node.create_client(PlanGait, f"/{PLANNER}/plan_gait")
+    side.connect(client)
+    plan = side.call(client, PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.41)).plan
+    assert 0 < ns(plan.header.stamp) < 10e9
+    # /tf received live is what was recorded, message for message
+    [bag] = list((tmp_path / "bags").iterdir())
+    [path] = bag.glob("*.mcap")
+    with open(path, "rb") as f:
+        recorded = [(m.log_time, m.data) for _, _, m in make_reader(f).iter_messages(topics=["/tf"], log_time_order=True)]
+    assert same_messages(tf, recorded)
+    # the metadata: rosbags opens it with every topic's QoS; the type hashes are rclpy's
+    with AnyReader([bag]) as reader:
+        qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
+    assert set(qos) == {"/joint_states", "/odom", "/angular_momentum", "/tf", "/tf_static", "/robot_description",
+                        "/gait_events"}
+    assert all(len(profiles) == 1 for profiles in qos.values())
+    info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+    hashes = {t["topic_metadata"]["name"]: t["topic_metadata"]["type_description_hash"]
+              for t in info["topics_with_message_count"]}
+    publisher = side.node.create_publisher(JointState, "/sim_time_test_hash", 1)
+    [endpoint] = side.node.get_publishers_info_by_topic("/sim_time_test_hash")
+    assert hashes["/joint_states"] == str(endpoint.topic_type_hash) and all(h.startswith("RIHS01_") for h in hashes.values())
+    side.node.destroy_publisher(publisher)
+
+
+def test_pause_resume_and_reset(planner_node, side, tmp_path):
+    clocks, momentum, counts = [], [], []
+    side.node.create_subscription(Clock, "/clock", lambda m: clocks.append(ns(m.clock)), BEST_EFFORT)
+    side.node.create_subscription(AngularMomentum, "/angular_momentum", momentum.append, QoSProfile(depth=5000))
+    side.node.create_subscription(UInt64, "/biped_gait_simulator/iterations", lambda m: counts.append(m.data),
+                                  QoSProfile(depth=100))
+    proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "record:=false", "wait_for_subscribers:=1")
+    services = {name: side.node.create_client(Trigger, f"/biped_gait_simulator/{name}") for name in ("pause", "resume", "reset")}
+    try:
+        for client in services.values():
+            side.connect(client)
+        side.wait(lambda: any(m.step >= 1 for m in momentum), 60.0)  # into the second step
+        assert side.call(services["pause"], Trigger.Request()).success
+        settle = time.monotonic() + 0.3
+        side.wait(lambda: time.monotonic() > settle)
+        held = len(clocks)
+        settle = time.monotonic() + 0.5
+        side.wait(lambda: time.monotonic() > settle)
+        assert len(clocks) == held, "the simulation went on while paused"
+        assert not side.call(services["pause"], Trigger.Request()).success  # already paused
+        assert side.call(services["resume"], Trigger.Request()).success
+        side.wait(lambda: len(clocks) > held + 50, 10.0)
+        before = len(momentum)
+        assert side.call(services["reset"], Trigger.Request()).success
+        side.wait(lambda: any(m.step == 0 for m in momentum[before:]), 10.0)
+        restart = next(m for m in momentum[before:] if m.step == 0)
+        assert restart.stance_foot.x == 0.0 and restart.stance_side == "right"
+        assert np.all(np.diff(clocks) > 0), "simulated time went back"
+        side.wait(lambda: counts and counts[-1] >= len(clocks) - 100, 5.0)  # the step counter follows
+        assert counts == sorted(counts)
+    finally:
+        assert stop_node(proc) == 0, (tmp_path / "biped-gait-simulator.log").read_text()
+
+
+def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
+    """A Foxglove client's view: the channels advertised with their ros2msg schemas, the robot
+    description sent on subscription, joint states streaming as CDR."""
+    proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "record:=false", "live_view:=true",
+                     "live_view_port:=0")
+    log = tmp_path / "biped-gait-simulator.log"
+    try:
+        deadline = time.monotonic() + 60.0
+        while not (match := re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text())) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert match, log.read_text()
+        while "walking L =" not in log.read_text() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        channels, received = asyncio.run(foxglove_client(int(match.group(1))))
+    finally:
+        assert stop_node(proc) == 0, log.read_text()
+    assert {"/robot_description", "/tf", "/tf_static", "/joint_states", "/angular_momentum"} <= set(channels)
+    assert channels["/joint_states"]["schemaName"] == "sensor_msgs/msg/JointState"
+    assert channels["/joint_states"]["encoding"] == "cdr" and channels["/joint_states"]["schemaEncoding"] == "ros2msg"
+    assert "<robot" in deserialize_message(received["/robot_description"][0], String).data
+    joints = [deserialize_message(data, JointState) for data in received["/joint_states"]]
+    assert len(joints) >= 10 and list(joints[0].name)[:2] == ["right_hip", "right_knee"]
+    odom = received.get("/odom")
+    assert odom is None or deserialize_message(odom[0], Odometry).header.frame_id == "world"
+
+
+async def foxglove_client(port: int) -> tuple[dict[str, dict], dict[str, list[bytes]]]:
+    """Connect with the Foxglove protocol, subscribe to every channel, and collect messages
+    until 10 joint states have come: (topic -> channel, topic -> payloads)."""
+    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"]) as ws:
+        channels: dict[str, dict] = {}
+        while "/joint_states" not in channels:
+            message = json.loads(await asyncio.wait_for(ws.recv(), 30.0))
+            if message["op"] == "advertise":
+                channels.update({c["topic"]: c for c in message["channels"]})
+        topics = {k: c["topic"] for k, c in enumerate(channels.values())}
+        await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+            {"id": k, "channelId": channels[topic]["id"]} for k, topic in topics.items()]}))
+        received: dict[str, list[bytes]] = {}
+        while len(received.get("/joint_states", [])) < 10 or "/robot_description" not in received:
+            message = await asyncio.wait_for(ws.recv(), 30.0)
+            if isinstance(message, bytes) and message[0] == 1:  # message data: op, subscription, log time, payload
+                _, subscription, _ = struct.unpack_from("<BIQ", message)
+                received.setdefault(topics[subscription], []).append(message[13:])
+        return channels, received
