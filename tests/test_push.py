@@ -16,7 +16,7 @@ from biped_gait.core.model import cross
 from biped_gait.core.push import DIRECTIONS, Push, TrunkPush, horizontal_impulse
 from biped_gait.core.stability import closed_loop
 from biped_gait.core.steering import DEFAULT_RATE, momentum_row, pelvis_pitch, reference
-from biped_gait.core.walk import PlannedOrbit, Walker
+from biped_gait.core.walk import PlannedOrbit, StepSamples, Walk, Walker
 
 pytestmark = pytest.mark.core
 
@@ -73,6 +73,30 @@ def test_a_push_splits_the_step_where_it_acts(planner, default_gait):
     assert np.max(np.abs(velocities[k + 1] - velocities[k - 1])) > 2 * smooth  # the jump between k-1 and k+1
     unpushed = Walker(planner.hybrid, orbit, rate=1000.0, reaim=False).walk_step()
     assert np.allclose([s.qd for s in unpushed.samples[:k - 1]], velocities[:k - 1], atol=1e-9)
+
+
+def test_a_push_splits_the_walks_sample_batches(planner, default_gait):
+    """``Walk.batches``: the samples before the push, the push, the samples at and after it,
+    each batch's world pictures those of its own samples; iterating gives the same order."""
+    orbit = PlannedOrbit.of(default_gait)
+    push = Push(horizontal_impulse(0.2, DIRECTIONS["forward"]), 0.2)
+
+    def walk() -> Walk:
+        def push_in_the_first_step(walker: Walker) -> None:
+            if walker.state.step == 0:
+                walker.push(push)
+        return Walk(orbit, 1000.0, steps=2, momentum_rate=DEFAULT_RATE, before_step=push_in_the_first_step)
+
+    items = list(walk().batches())
+    kinds = [type(item).__name__ for item in items]
+    assert kinds == ["StepSamples", "AppliedPush", "StepSamples", "Touchdown", "StepSamples", "Touchdown", "Finished"]
+    before, applied, after = items[:3]
+    assert before.t[-1] < applied.t <= after.t[0]
+    assert all(len(b.world) == len(b.samples) for b in items if isinstance(b, StepSamples))
+    assert np.allclose(after.world.joint_positions[0], after.world.state(0).joint_positions)
+    flat = [type(item).__name__ for item in walk()]
+    assert flat.index("AppliedPush") == len(before.samples)
+    assert flat.count("Sample") == sum(len(b.samples) for b in items if isinstance(b, StepSamples))
 
 
 def test_a_push_after_the_touchdown_acts_on_the_pre_impact_state(planner, default_gait):
