@@ -111,7 +111,7 @@ def test_clock_tf_and_the_recording_as_users_expect(planner_node, side, tmp_path
     with AnyReader([bag]) as reader:
         qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
     assert set(qos) == {"/joint_states", "/odom", "/angular_momentum", "/tf", "/tf_static", "/robot_description",
-                        "/gait_events"}
+                        "/gait_events", "/gait_phase"}
     assert all(len(profiles) == 1 for profiles in qos.values())
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     hashes = {t["topic_metadata"]["name"]: t["topic_metadata"]["type_description_hash"]

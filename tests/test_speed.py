@@ -65,18 +65,23 @@ def test_fixed_cadence_keeps_the_period(atlas, walkable):
     assert without.low == pytest.approx(0.25 / 0.45) and without.high == pytest.approx(0.65 / 0.45)
 
 
-def test_a_gait_whose_foot_comes_up_to_the_touchdown_is_not_walkable(planner):
-    """At L = 0.35 m, T = 0.55 s the planner's gait is admissible (clearance is checked on
-    (0.05 T, 0.95 T)) but its swing tip reaches the touchdown moving up, from under the ground."""
+def test_a_gait_whose_foot_comes_up_to_the_touchdown_is_neither_admissible_nor_walkable(planner):
+    """At L = 0.35 m, T = 0.55 s the swing tip reaches the touchdown moving up, from under the
+    ground (its clearance is judged on (0.05 T, 0.95 T) only): the planner says so (the arrival
+    limit), and the walk check finds the same on its own when the node is taken as admissible."""
     params = load_params()
     grid = Grid(np.array([0.35, 0.45]), np.array([0.45, 0.55]), np.array([ALPHA]))
     atlas = Atlas.empty(params, GaitMode.NORMAL, grid)
     for i, j in ((0, 1), (1, 0)):
         gait = planner.plan(GaitRequest(*grid.point((i, j, 0)), GaitMode.NORMAL))
-        assert gait.admissible
+        assert gait.step.converged
         atlas.nodes["status"][i, j, 0] = NodeStatus.ADMISSIBLE
         atlas.nodes["qd_a"][i, j, 0], atlas.nodes["theta"][i, j, 0] = gait.step.qd_a, gait.theta
         atlas.nodes["spectral_radius"][i, j, 0] = 1.0
+        if (i, j) == (0, 1):
+            assert not gait.admissible and any("reaches the ground from below" in r for r in gait.reasons), gait.reasons
+        else:
+            assert gait.admissible
     assert walkable_nodes(atlas, ALPHA, planner.hybrid, DEFAULTS.walk_steps).tolist() == [[False, False], [True, False]]
 
 

@@ -127,14 +127,16 @@ def test_figure_commands_write_png(tmp_path, name, options):
 @pytest.mark.timeout(300)
 def test_results_page_is_generated_with_its_figures(tmp_path):
     page = tmp_path / "docs" / "results.md"
-    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--workers", "2", timeout=280)
+    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "22.5", "--workers", "2",
+               timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
     for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
                     "## The paper's claims, checked on these numbers",
                     "## Where the project and the paper differ, and why",
                     "## Where walking is possible (maps beyond the paper)", "## Stability of the gaits (beyond the paper)",
-                    "## The physics a reviewer would check (beyond the paper)", "### Beside human walking"):
+                    "## The physics a reviewer would check (beyond the paper)", "### Beside human walking",
+                    "## The walk: stability, pushes, commanded speed"):
         assert heading in text
     links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
     assert links[:3] == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
