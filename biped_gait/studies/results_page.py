@@ -360,7 +360,7 @@ def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> l
         lines += reading(maps)
         lines.append("")
         lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-                  if f"parameter set {maps.params}" in caption and path.startswith("map-")]
+                  if path.startswith("map-") and path.endswith(f"-{maps.params}.png")]
     return lines
 
 

@@ -42,11 +42,14 @@ def _readings_table(readings: Readings) -> list[str]:
     return lines
 
 
-def _worst_impulse_friction(comparisons) -> tuple[float, float]:
-    """The largest friction ratio the reaction impulses need, normal and anti-normal."""
-    def worst(gait) -> float:
-        return float(np.max(gait.double_support.impulse_friction_ratios))
-    return max(worst(c.normal.gait) for c in comparisons), max(worst(c.anti_normal) for c in comparisons)
+def _impulse_friction(gaits) -> str:
+    """What friction the reaction impulses of ``gaits`` need: the largest finite ratio, and how
+    many impulses are purely tangential (no vertical part: an infinite ratio)."""
+    ratios = np.concatenate([gait.double_support.impulse_friction_ratios for gait in gaits])
+    finite = ratios[np.isfinite(ratios)]
+    text = f"up to {finite.max():.2f}" if finite.size else "no finite ratio"
+    tangential = int(np.sum(np.isinf(ratios)))
+    return text + (f", and {tangential} of {ratios.size} impulses are purely tangential" if tangential else "")
 
 
 def reviewer_lines(checks: ReviewerChecks, rate_figure: str) -> list[str]:
@@ -56,7 +59,8 @@ def reviewer_lines(checks: ReviewerChecks, rate_figure: str) -> list[str]:
     cone, free, absolute_free = comparisons[labels[0]], comparisons[labels[1]], comparisons[labels[2]]
     rise = [100 * (c.normal.W / f.normal.W - 1) for c, f in zip(cone, free)]
     rise_anti = [100 * (c.anti_normal.W / f.anti_normal.W - 1) for c, f in zip(cone, free)]
-    need_normal, need_anti = _worst_impulse_friction(free)
+    need_normal = _impulse_friction([c.normal.gait for c in free])
+    need_anti = _impulse_friction([c.anti_normal for c in free])
     lines = ["", "## The physics a reviewer would check (beyond the paper)", "",
              "### The friction cone, and the effort's reading", "",
              "The double support's reaction impulses must stay in the floor's friction cone (coefficient mu = 0.5 "
@@ -65,8 +69,8 @@ def reviewer_lines(checks: ReviewerChecks, rate_figure: str) -> list[str]:
              "angles (each link's net torque impulse). Optimal alpha (deg) and W (N m s) at T = 0.45 s:", ""]
     lines += _readings_table(checks.readings)
     lines += ["",
-              f"- Without the cone the impulses need friction up to {need_normal:.2f} (normal) and {need_anti:.2f} "
-              f"(anti-normal); the cone raises W by {min(rise):.1f} to {max(rise):.1f} % (normal) and "
+              f"- Without the cone the reaction impulses need friction {need_normal} (normal), {need_anti} "
+              f"(anti-normal; a purely tangential impulse has no vertical part for a floor to hold it by); the cone raises W by {min(rise):.1f} to {max(rise):.1f} % (normal) and "
               f"{min(rise_anti):.1f} to {max(rise_anti):.1f} % (anti-normal): the anti-normal swing leans on friction "
               "a floor does not give.",
               "- With the cone, the joint reading puts the optimal alpha at "
