@@ -164,7 +164,7 @@ def region_figure(maps: WalkingMaps) -> Figure:
     ax.set_ylabel("period T (s)")
     ax.set_title(f"Where walking is possible, params {maps.params}\n(normal gait, some alpha in [0, 45] deg)",
                  fontsize="medium")
-    ax.legend(handles=handles, fontsize="small", loc="upper left", framealpha=0.9)
+    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2)
     return fig
 
 
