@@ -54,11 +54,11 @@ def per_call_us(call, count: int = 20000) -> float:
 
 def cold_solve_ms(planner: GaitPlanner, repeat: int = 7) -> float:
     """Median time of a gait solve with no guess (ms), as benchmarks/bench_gait.py's cold solve."""
-    planner.plan(REQUEST)
+    planner.plan(REQUEST, cold=True)
     times = []
     for alpha in np.radians(np.linspace(15.0, 30.0, repeat)):
         start = time.perf_counter()
-        planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"))
+        planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"), cold=True)
         times.append(time.perf_counter() - start)
     return 1e3 * statistics.median(times)
 

@@ -5,8 +5,10 @@ never waits for encoding or the disk. The recorder may run in a process of its o
 
 A queued message is CDR bytes, or a function giving them, called on the writer thread (a
 service's exchange is serialized there, after the answer has gone). Stamps are taken when a
-message is queued (ns since the epoch). The queue is bounded (``max_pending`` messages): past
-it, the caller waits for the writer (a disk slower than the caller for long).
+message is queued (ns since the epoch). Samples of several topics come as rows
+(``write_samples``: a simulation step's at once, one entry of the queue). The queue is bounded
+(``max_pending`` entries): past it, the caller waits for the writer (a disk slower than the
+caller for long).
 
 Failures are those of ``McapRecorder`` (a full disk, a deleted folder): the writer thread stops
 there, the file finished as far as it got, and the error (``RecordingError``, one line) is
@@ -21,11 +23,11 @@ from collections import deque
 from collections.abc import Callable
 
 from .recorder_process import RecorderProcess
-from .writer import McapRecorder, RecordingError
+from .writer import McapRecorder, RecordingError, SampleRows
 
 Payload = bytes | Callable[[], bytes]
 BATCH_PERIOD = 0.02  # s: the longest a queued message waits for the writer thread
-MAX_PENDING = 200_000  # messages queued at most (a few hundred MB of walk messages)
+MAX_PENDING = 200_000  # queue entries at most (messages, or steps of samples)
 
 
 class BackgroundRecorder:
@@ -35,7 +37,7 @@ class BackgroundRecorder:
     def __init__(self, recorder: McapRecorder | RecorderProcess, max_pending: int = MAX_PENDING) -> None:
         self.recorder = recorder
         self.bag_dir, self.path = recorder.bag_dir, recorder.path
-        self._queue: deque[tuple[str, Payload, int]] = deque()
+        self._queue: deque[tuple[str, Payload, int] | SampleRows] = deque()
         self._max_pending = max_pending
         self._wake = threading.Event()
         self._room = threading.Condition()
@@ -62,11 +64,18 @@ class BackgroundRecorder:
     def write(self, topic: str, data: Payload, stamp_ns: int | None = None) -> None:
         """Queue ``data`` (CDR bytes, or a function giving them) on ``topic`` at ``stamp_ns``
         (default: now); ``RecordingError`` once after the writer failed; nothing once closed."""
+        self._enqueue((topic, data, time.time_ns() if stamp_ns is None else stamp_ns))
+
+    def write_samples(self, samples: SampleRows) -> None:
+        """Queue rows of samples (one entry); as ``write``."""
+        self._enqueue(samples)
+
+    def _enqueue(self, entry: tuple[str, Payload, int] | SampleRows) -> None:
         if self._error is not None or self._closing:
             self._check()
             return
         queue = self._queue
-        queue.append((topic, data, time.time_ns() if stamp_ns is None else stamp_ns))
+        queue.append(entry)
         if len(queue) >= self._max_pending:
             self._wait_for_room()
 
@@ -91,8 +100,8 @@ class BackgroundRecorder:
             closing = self._closing
             batch = [queue.popleft() for _ in range(len(queue))]
             try:
-                self.recorder.write_many([(topic, data if isinstance(data, bytes) else data(), int(stamp))
-                                          for topic, data, stamp in batch])
+                self.recorder.write_many([entry if isinstance(entry, SampleRows) else _message(*entry)
+                                          for entry in batch])
             except RecordingError as exc:
                 self._error = exc
             except Exception as exc:  # noqa: BLE001  a payload that could not be serialized
@@ -117,3 +126,8 @@ class BackgroundRecorder:
         self._thread.join()
         self._check()
         self.recorder.close()
+
+
+def _message(topic: str, data: Payload, stamp: int) -> tuple[str, bytes, int]:
+    """A queued message as the recorder takes it (the bytes made now if they were deferred)."""
+    return topic, data if isinstance(data, bytes) else data(), int(stamp)

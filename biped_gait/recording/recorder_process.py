@@ -21,7 +21,7 @@ import threading
 from multiprocessing.connection import Connection
 from pathlib import Path
 
-from .writer import DEFAULT_CHUNK_SIZE, McapRecorder, RecordingError
+from .writer import DEFAULT_CHUNK_SIZE, McapRecorder, Message, RecordingError, SampleRows
 
 
 class RecorderProcess:
@@ -74,7 +74,7 @@ class RecorderProcess:
         """``McapRecorder.add_topic``."""
         self._call("add_topic", topic, datatype, qos, type_hash)
 
-    def write_many(self, messages: list[tuple[str, bytes, int]]) -> None:
+    def write_many(self, messages: list[Message | SampleRows]) -> None:
         """``McapRecorder.write_many``."""
         if messages:
             self._call("write_many", messages)

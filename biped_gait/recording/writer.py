@@ -25,9 +25,11 @@ from __future__ import annotations
 import os
 import threading
 import time
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import yaml
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import Writer as RawWriter
@@ -37,6 +39,7 @@ from .schemas import schema_text, type_hash as installed_type_hash
 from .sink import FileSink, Opener, open_unbuffered
 
 DEFAULT_CHUNK_SIZE = 64 * 1024
+Message = tuple[str, bytes, int]  # topic, CDR bytes, stamp (ns since the epoch)
 RESERVE_NAME = ".space_reserve"
 RESERVE_MARGIN = 256 * 1024  # bytes beyond two chunks: the summary and metadata.yaml
 
@@ -53,6 +56,33 @@ def _reason(exc: OSError) -> str:
 class _Channel:
     id: int
     record: TopicRecord
+
+
+@dataclass(frozen=True)
+class SampleRows:
+    """Samples of several topics taken together, as rows: sample ``k`` is one message per topic,
+    the CDR bytes ``rows[i][k]`` on ``topics[i]``, all at ``stamps[k]`` (ns since the epoch).
+    Recorded in sample order, the topics in their order within a sample, as if written one by
+    one; handed over as arrays, so that a step of samples costs its writer one call."""
+
+    topics: tuple[str, ...]
+    rows: tuple[np.ndarray, ...]  # per topic: n x (message size) uint8
+    stamps: np.ndarray  # n, int64
+
+    def messages(self) -> Iterator[Message]:
+        """The messages, one by one, in recording order."""
+        columns = [[row.tobytes() for row in rows] for rows in self.rows]
+        for k, stamp in enumerate(self.stamps.tolist()):
+            for topic, column in zip(self.topics, columns):
+                yield topic, column[k], stamp
+
+
+def _each_message(items: Iterable[Message | SampleRows]) -> Iterator[Message]:
+    for item in items:
+        if isinstance(item, SampleRows):
+            yield from item.messages()
+        else:
+            yield item
 
 
 class McapRecorder:
@@ -115,14 +145,15 @@ class McapRecorder:
         cannot take it: the recorder has then finished the file as far as it got."""
         self.write_many([(topic, data, time.time_ns() if stamp_ns is None else int(stamp_ns))])
 
-    def write_many(self, messages: list[tuple[str, bytes, int]]) -> None:
-        """Record ``messages`` (topic, CDR bytes, stamp in ns since the epoch), in this order,
-        each chunk they close handed to the file at once; as ``write`` otherwise."""
+    def write_many(self, messages: list[Message | SampleRows]) -> None:
+        """Record ``messages`` ((topic, CDR bytes, stamp in ns since the epoch), or rows of
+        samples), in this order, each chunk they close handed to the file at once; as ``write``
+        otherwise."""
         with self._lock:
             if self.closed or not messages:
                 return
             add, channels, sink = self._writer.add_message, self._channels, self._sink
-            for topic, data, stamp in messages:
+            for topic, data, stamp in _each_message(messages):
                 entry = channels[topic]
                 add(entry.id, log_time=stamp, data=data, publish_time=stamp, sequence=entry.record.count)
                 entry.record.count += 1

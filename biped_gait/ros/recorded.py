@@ -51,10 +51,15 @@ class RecordedPublisher:
     def publish_serialized(self, data: bytes, stamp_ns: int | None = None) -> None:
         """Publish, record and show the CDR bytes ``data`` of one message, stamped ``stamp_ns``
         (ns; default: now)."""
-        if self.publisher is not None:
-            self.publisher.publish(data)
+        self.send(data, stamp_ns)
         if self.recorder is not None:
             self.recorder.write(self.topic, data, stamp_ns)
+
+    def send(self, data: bytes, stamp_ns: int | None = None) -> None:
+        """Publish and show the CDR bytes ``data`` without recording them: the caller records
+        them with others at once (``BackgroundRecorder.write_samples``)."""
+        if self.publisher is not None:
+            self.publisher.publish(data)
         if self.live is not None:
             self.live.log(self.topic, data, stamp_ns)
 

@@ -72,7 +72,7 @@ from ..core.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
-from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError
+from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError, SampleRows
 from .conversions import MODE_TO_MSG, orbit_from_msg
 from .gait_phase import GaitPhases
 from .live_view import DEFAULT_PORT, LiveView
@@ -88,6 +88,7 @@ from .walk_messages import SampleMessages, event_msg, stamp_msg, tf_msg
 
 NODE_NAME = "biped_gait_simulator"
 LOG_PERIOD = 5.0  # s between the log lines of a long wait
+RECORD_EVERY = 16  # samples published between two hand-overs to the recorder (a kill loses them at most)
 PARAMETERS = (
     Param("plan_source", "service", "where the plan comes from: 'service' requests one, 'topic' walks the latest "
           "one published", choices=("service", "topic")),
@@ -425,33 +426,50 @@ class SimulatorNode(Node):
 
     # Publishing ---------------------------------------------------------------------------
     def _publish_step(self, step: StepSamples, base_ns: int, offset: float, pacer: Pacer) -> bool:
-        """Publish (and record, and show) the samples of one step, each when the pacing releases
-        it, with /clock first; False if stopped or reset before the last."""
+        """Publish (and show) the samples of one step, each when the pacing releases it, with
+        /clock first, then record those published at once; False if stopped or reset before the
+        last."""
         first = step.samples[0]
         t = step.t
         stamps_ns = base_ns + np.round(t * 1e9).astype(np.int64)
         rows = self._messages.encode(step.world, stamps_ns, first.step, first.stance_side)
-        outputs = [(self.sampled[topic].publish_serialized, [row.tobytes() for row in encoded])
-                   for topic, encoded in rows.items()]
+        publishers = [self.sampled[topic] for topic in rows]
+        outputs = [(publisher.send, [row.tobytes() for row in encoded])
+                   for publisher, encoded in zip(publishers, rows.values())]
         clock = [row.tobytes() for row in self.clock.encode(stamps_ns)]
         controls, stop, live, paced = self.controls, self._stop, self.live, pacer.factor > 0
         if not self.context.ok():  # shut down under us: a stop (the stop flag says so at each sample)
             return False
-        for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
-            if controls.paused:
-                held = time.monotonic()
-                controls.hold(stop)
-                pacer.delay(time.monotonic() - held)
-            if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
-                return False
-            self.clock.publish(clock[k])
-            if k == 0:
-                self.phases.sample(first.step, first.stance_side, first.t, base_ns)
-            for publish, data in outputs:
-                publish(data[k], stamp)
-            if live is not None:
-                live.time(stamp)
-            controls.iterations += 1
+        recorder, names, encoded = self.recorder, tuple(p.topic for p in publishers), tuple(rows.values())
+        published = recorded = 0
+
+        def record() -> None:  # the samples published since the last call
+            recorder.write_samples(SampleRows(names, tuple(e[recorded:published] for e in encoded),
+                                              stamps_ns[recorded:published]))
+
+        try:
+            for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
+                if controls.paused:
+                    held = time.monotonic()
+                    controls.hold(stop)
+                    pacer.delay(time.monotonic() - held)
+                if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
+                    return False
+                self.clock.publish(clock[k])
+                if k == 0:
+                    self.phases.sample(first.step, first.stance_side, first.t, base_ns)
+                for send, data in outputs:
+                    send(data[k], stamp)
+                if live is not None:
+                    live.time(stamp)
+                controls.iterations += 1
+                published = k + 1
+                if recorder is not None and published - recorded == RECORD_EVERY:
+                    record()
+                    recorded = published
+        finally:
+            if recorder is not None and published > recorded:
+                record()
         return True
 
     def _event(self, kind: int, step: int, side: str, time_in_step: float, base_ns: int, t: float, message: str,
