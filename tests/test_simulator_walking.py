@@ -61,8 +61,10 @@ def test_a_push_below_the_limit_is_recovered(planner_node, forward_limit, tmp_pa
     events: list[GaitEvent] = []
     try:
         side.node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
+        side.node.create_subscription(JointState, "/joint_states", lambda m: None, 10)  # the walk waits for it
         client = side.node.create_client(Push, f"/{SIMULATOR}/push")
-        proc = simulator(tmp_path, "steps:=24", "real_time_factor:=2.0", "exit_when_done:=true", "record:=false")
+        proc = simulator(tmp_path, "steps:=24", "real_time_factor:=2.0", "exit_when_done:=true", "record:=false",
+                         "wait_for_subscribers:=1")
         side.connect(client, 60.0)
         side.wait(lambda: any(e.kind == GaitEvent.TOUCHDOWN for e in events), 60.0)
         response = side.call(client, Push.Request(impulse=Vector3(x=magnitude), phase=PHASE))
