@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
+from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
@@ -18,7 +19,7 @@ from biped_gait.recording.qos import qos_description
 from biped_gait.recording.reader import open_bag
 from biped_gait.recording.recover import is_complete, recover
 from biped_gait.recording.schemas import SEPARATOR, schema_text
-from biped_gait.recording.writer import McapRecorder
+from biped_gait.recording.writer import McapRecorder, SampleRows
 
 pytestmark = pytest.mark.recording
 
@@ -72,6 +73,32 @@ def test_what_is_written_two_readers_read_back_with_its_qos(tmp_path):
         got = [(c.topic, t, reader.deserialize(raw, c.msgtype)) for c, t, raw in reader.messages()]
     assert [t for _, t, _ in got] == [1_000, 2_000, 2_001, 2_002, 2_003, 2_004]
     assert got[0][2].data == "<robot/>" and list(got[-1][2].position) == [0.4, -0.2]
+
+
+def test_rows_of_samples_are_recorded_as_the_same_messages_one_by_one(tmp_path):
+    """``SampleRows`` (what the simulator hands over, through its recorder process) gives the
+    file that writing each message in sample order gives: same bytes, stamps and order."""
+    joints = [joint_state(i) for i in range(4)]
+    names = [string(f"s{i}") for i in range(4)]  # rows of one topic have one size
+    rows = SampleRows(("/joint_states", "/names"), (np.frombuffer(b"".join(joints), np.uint8).reshape(4, -1),
+                                                    np.frombuffer(b"".join(names), np.uint8).reshape(4, -1)),
+                      np.arange(4, dtype=np.int64) * 1_000 + 5)
+    by_rows, one_by_one = McapRecorder(tmp_path, "rows"), McapRecorder(tmp_path, "messages")
+    for recorder in (by_rows, one_by_one):
+        recorder.add_topic("/joint_states", JOINTS, [STREAM])
+        recorder.add_topic("/names", STRING, [STREAM])
+    by_rows.write_many([rows])
+    for i in range(4):
+        one_by_one.write("/joint_states", joints[i], 1_000 * i + 5)
+        one_by_one.write("/names", names[i], 1_000 * i + 5)
+    by_rows.close()
+    one_by_one.close()
+
+    def read(name: str) -> list:
+        [path] = (tmp_path / name).glob("*.mcap")
+        with open(path, "rb") as f:
+            return [(channel.topic, m.log_time, m.data) for _, channel, m in make_reader(f).iter_messages()]
+    assert read("rows") == read("messages") and len(read("rows")) == 8
 
 
 def test_recover_rebuilds_a_killed_writers_file_with_full_metadata(tmp_path):
