@@ -175,8 +175,9 @@ class ImpactMap:
         ends with ``qd_b`` and the double support applies the joint impulses ``i_minus`` and
         ``i_plus`` (N m s, q3..q9) around the passive impact: eqs. (6)-(10) run forward as three
         impacts, the old stance tip keeping its velocity through I^-, the new one at rest after
-        the impact and after I^+; then the leg exchange."""
-        xd_b = np.concatenate([np.zeros(3), qd_b])
+        the impact and after I^+; then the leg exchange. ``qd_b`` may also be 9 x k (k
+        velocities, one per column: k results, as columns)."""
+        xd_b = np.concatenate([np.zeros((3,) + qd_b.shape[1:]), qd_b])
         xd_minus = impact_with(self.mass_matrix, self.j1, xd_b, i_minus, at_rest=False)
         xd_plus = impact_with(self.mass_matrix, self.j2, xd_minus, np.zeros(7), at_rest=True)
         xd_a = impact_with(self.mass_matrix, self.j2, xd_plus, i_plus, at_rest=True)
@@ -194,10 +195,12 @@ def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, jo
                 at_rest: bool) -> np.ndarray:
     """The extended velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R with
     the contact point of ``contact`` (J, 3 x 12) at rest after it (``at_rest``) or keeping its
-    velocity (J Xd' = J Xd); ``joint_impulse`` I on q3..q9 (N m s)."""
-    kkt = np.block([[mass_matrix, -contact.T], [contact, np.zeros((3, 3))]])
-    rhs = np.concatenate([mass_matrix @ xd, np.zeros(3) if at_rest else contact @ xd])
-    rhs[5:12] += joint_impulse
+    velocity (J Xd' = J Xd); ``joint_impulse`` I on q3..q9 (N m s). ``xd`` may be 12 x k
+    (k velocities as columns, the same impulse added to each)."""
+    kkt = np.zeros((15, 15))
+    kkt[:12, :12], kkt[:12, 12:], kkt[12:, :12] = mass_matrix, -contact.T, contact
+    rhs = np.concatenate([mass_matrix @ xd, np.zeros((3,) + xd.shape[1:]) if at_rest else contact @ xd])
+    rhs[5:12] += joint_impulse if xd.ndim == 1 else joint_impulse[:, None]
     return np.linalg.solve(kkt, rhs)[:12]
 
 

@@ -97,11 +97,8 @@ class PoincareMap:
         """d reset / d (q, qd) (18 x 18): the velocity part exactly (the reset is linear in qd),
         the configuration part by central differences."""
         out = np.zeros((18, 18))
-        impact = self.hybrid.impact(q)
+        out[9:, 9:] = self.hybrid.impact(q).forward(np.eye(9), np.zeros(7), np.zeros(7))
         for j in range(9):
-            unit = np.zeros(9)
-            unit[j] = 1.0
-            out[9:, 9 + j] = impact.forward(unit, np.zeros(7), np.zeros(7))
             step = np.zeros(9)
             step[j] = FD_STEP
             out[:, j] = (self.reset(q + step, qd) - self.reset(q - step, qd)) / (2 * FD_STEP)
