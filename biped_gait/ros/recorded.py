@@ -40,20 +40,16 @@ class RecordedPublisher:
         if self.publisher is None and self.live is None:
             self.record_later(lambda: msg, stamp_ns)
             return
-        self.publish_serialized(serialize_message(msg), stamp_ns)
+        data = serialize_message(msg)
+        self.send(data, stamp_ns)
+        if self.recorder is not None:
+            self.recorder.write(self.topic, data, stamp_ns)
 
     def record_later(self, make: Callable[[], object], stamp_ns: int | None = None) -> None:
         """Record the message ``make()`` returns, built and serialized on the recorder's writer
         thread (for a recorded-only topic), at ``stamp_ns`` (ns; default: now)."""
         if self.recorder is not None:
             self.recorder.write(self.topic, lambda: serialize_message(make()), stamp_ns)
-
-    def publish_serialized(self, data: bytes, stamp_ns: int | None = None) -> None:
-        """Publish, record and show the CDR bytes ``data`` of one message, stamped ``stamp_ns``
-        (ns; default: now)."""
-        self.send(data, stamp_ns)
-        if self.recorder is not None:
-            self.recorder.write(self.topic, data, stamp_ns)
 
     def send(self, data: bytes, stamp_ns: int | None = None) -> None:
         """Publish and show the CDR bytes ``data`` without recording them: the caller records
