@@ -22,10 +22,10 @@ import warnings
 
 import numpy as np
 
-from biped_gait.core.atlas import Atlas, atlas_path
-from biped_gait.core.configurations import GaitMode
-from biped_gait.core.params import load_params, shipped_param_names
-from biped_gait.core.planner import GaitPlanner, GaitRequest
+from biped_gait.core.gait.atlas import Atlas, atlas_path
+from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.core.model.params import load_params, shipped_param_names
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.studies.executors import check_workers
 from bench_study import time_study  # this folder's Fig. 4 timing
 

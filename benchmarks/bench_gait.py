@@ -18,11 +18,11 @@ import time
 
 import numpy as np
 
-from biped_gait.core.flow import hermite_samples
-from biped_gait.core.impulses import solve_l1
-from biped_gait.core.planner import GaitPlanner, GaitRequest
-from biped_gait.core.reports import energy_drift, step_figures
-from biped_gait.core.samples import NativeSamples, SampleEvaluator
+from biped_gait.core.dynamics.flow import hermite_samples
+from biped_gait.core.dynamics.impulses import solve_l1
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.gait.figures import energy_drift, step_figures
+from biped_gait.core.dynamics.samples import NativeSamples, SampleEvaluator
 
 
 def median_ms(call, repeat: int) -> float:

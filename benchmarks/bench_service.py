@@ -32,7 +32,7 @@ from rclpy.serialization import deserialize_message, serialize_message  # noqa: 
 from std_msgs.msg import Header  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
-from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.ros.client import ClientSide  # noqa: E402
 from biped_gait.ros.conversions import plan_msg  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402

@@ -31,10 +31,10 @@ from mcap.writer import Writer  # noqa: E402
 from rclpy.serialization import serialize_message  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 
-from biped_gait.core.planner import GaitPlanner, GaitRequest  # noqa: E402
-from biped_gait.core.samples import NativeSamples  # noqa: E402
-from biped_gait.core.urdf import PHYSICAL_JOINTS  # noqa: E402
-from biped_gait.core.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.core.dynamics.samples import NativeSamples  # noqa: E402
+from biped_gait.core.model.urdf import PHYSICAL_JOINTS  # noqa: E402
+from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
 from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402

@@ -14,7 +14,7 @@ import statistics
 import time
 
 from biped_gait.studies.executors import check_workers, open_executor
-from biped_gait.core.params import load_params
+from biped_gait.core.model.params import load_params
 from biped_gait.studies.study import fig4_grid
 from biped_gait.studies.sweep import SweepGrid, solve_grid
 

@@ -1,4 +1,4 @@
-"""``biped-gait atlas``: build, show and check gait atlases (``core.atlas``).
+"""``biped-gait atlas``: build, show and check gait atlases (``core.gait.atlas``).
 
 - ``atlas build [--params NAME|FILE] [--mode M ...] [--out DIR] [--workers N | --scheduler ADDR]``:
   build by continuation (``studies.atlas_build``), with a progress bar; written where the
@@ -16,9 +16,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from .core.atlas import Atlas, AtlasError, Grid, atlas_path, rebuild_command
-from .core.configurations import GaitMode
-from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from .core.gait.atlas import Atlas, AtlasError, Grid, atlas_path, rebuild_command
+from .core.gait.configurations import GaitMode
+from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from .studies.atlas_build import build_atlas
 from .studies.executors import open_executor
 

@@ -24,9 +24,10 @@ from tqdm import tqdm
 
 from . import atlas_cli
 from .arguments import OneLineParser, check_output_file, check_output_folder
-from .core.params import DEFAULT_PARAMS, load_params, shipped_param_names
-from .core.planner import GaitPlanner, GaitRequest, validate_request
-from .core.urdf import make_urdf
+from .core.gait import views
+from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from .core.gait.planner import GaitPlanner, GaitRequest, validate_request
+from .core.model.urdf import make_urdf
 from .recording.recover import check_mcap, is_complete, recover
 from .studies.executors import open_executor
 from .studies.figures import save, sweep_figures
@@ -359,13 +360,13 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # a write at the end failed (disk full, folder removed meanwhile)
         print(f"biped-gait: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    print(result.summary(), file=sys.stderr if to_stdout else sys.stdout)
+    print(views.summary(result), file=sys.stderr if to_stdout else sys.stdout)
     try:
         if to_stdout:
-            sys.stdout.write(result.to_json() + "\n")
+            sys.stdout.write(views.to_json(result) + "\n")
         elif args.json:
             args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(result.to_json())
+            args.json.write_text(views.to_json(result))
             print(f"result written to {args.json}")
     except OSError as exc:
         print(f"biped-gait: error: cannot write {args.json}: {exc.strerror or exc}", file=sys.stderr)

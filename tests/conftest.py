@@ -14,8 +14,8 @@ os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 100)
 import numpy as np
 import pytest
 
-from biped_gait.core.planner import GaitPlanner, GaitRequest
-from biped_gait.core.impulses import ImpactProblem
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.dynamics.impulses import ImpactProblem
 
 DEFAULT_REQUEST = GaitRequest(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5), mode="normal")
 

@@ -42,13 +42,14 @@ SWEEP_ARGS = ("--step-length", "0.45", "--period", "0.45", "--alpha-deg-range", 
 
 def plan_texts(params: str) -> list[str]:
     """The plan JSON of each of ``REQUESTS`` for the parameter set ``params``, solve time left out."""
-    from biped_gait.core.planner import GaitPlanner, GaitRequest
+    from biped_gait.core.gait import views
+    from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 
     planner = GaitPlanner(params)
     texts = []
     for length, period, alpha, mode, extra in REQUESTS:
         gait = planner.plan(GaitRequest(length, period, math.radians(alpha), mode, **extra))
-        figures = gait.to_dict()
+        figures = views.to_dict(gait)
         figures.pop("solve_time_s")
         texts.append(json.dumps(figures, indent=1))
     return texts
@@ -56,8 +57,8 @@ def plan_texts(params: str) -> list[str]:
 
 def walk_arrays() -> dict[str, np.ndarray]:
     """20 steps of the default gait walked with momentum steering at 200 samples per second."""
-    from biped_gait.core.planner import GaitPlanner, GaitRequest
-    from biped_gait.core.walk import PlannedOrbit, StepSamples, Touchdown, Walk
+    from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+    from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Touchdown, Walk
 
     gait = GaitPlanner().plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
     walk = Walk(PlannedOrbit.of(gait), rate=200.0, steps=20, momentum_rate=0.25)

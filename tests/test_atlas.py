@@ -13,11 +13,11 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-from biped_gait.core.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path
-from biped_gait.core.configurations import GaitMode
-from biped_gait.core.continuation import continue_to
-from biped_gait.core.params import load_params, shipped_param_names
-from biped_gait.core.planner import SEED, GaitPlanner, GaitRequest
+from biped_gait.core.gait.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path
+from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.core.gait.continuation import continue_to
+from biped_gait.core.model.params import load_params, shipped_param_names
+from biped_gait.core.gait.planner import SEED, GaitPlanner, GaitRequest
 from biped_gait.studies.atlas_build import build_atlas
 
 from .test_cli import run

@@ -17,10 +17,10 @@ import math
 
 import pytest
 
-from biped_gait.core.planner import GaitRequest
-from biped_gait.core.settings import DEFAULTS
+from biped_gait.core.gait.planner import GaitRequest
+from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.studies.optimize import ALPHA_RANGE, compare_modes
-from biped_gait.core.params import load_params
+from biped_gait.core.model.params import load_params
 from biped_gait.studies.results_page import momentum_jump
 
 pytestmark = pytest.mark.studies

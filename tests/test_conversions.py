@@ -16,12 +16,12 @@ from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
 
-from biped_gait.core.configurations import GaitMode  # noqa: E402
-from biped_gait.core.gait_views import FIELDS  # noqa: E402
-from biped_gait.core.model import JOINT_NAMES  # noqa: E402
-from biped_gait.core.planner import GaitRequest  # noqa: E402
-from biped_gait.core.urdf import PHYSICAL_JOINTS, physical_joint_array  # noqa: E402
-from biped_gait.core.walk import PlannedOrbit  # noqa: E402
+from biped_gait.core.gait.configurations import GaitMode  # noqa: E402
+from biped_gait.core.gait.views import FIELDS  # noqa: E402
+from biped_gait.core.model.biped import JOINT_NAMES  # noqa: E402
+from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
+from biped_gait.core.model.urdf import PHYSICAL_JOINTS, physical_joint_array  # noqa: E402
+from biped_gait.core.walking.walk import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
 from biped_gait.ros.conversions import mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key  # noqa: E402
 

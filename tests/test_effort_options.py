@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.core.configurations import GaitMode
-from biped_gait.core.impulses import friction_ratios
-from biped_gait.core.params import load_params
+from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.core.dynamics.impulses import friction_ratios
+from biped_gait.core.model.params import load_params
 from biped_gait.studies.optimize import compare_modes
 
 from .conftest import DEFAULT_REQUEST

@@ -8,7 +8,7 @@ import pinocchio as pin
 import pytest
 from scipy.integrate import solve_ivp
 
-from biped_gait.core.flow import BallisticFlow, hermite_samples
+from biped_gait.core.dynamics.flow import BallisticFlow, hermite_samples
 
 pytestmark = pytest.mark.core
 

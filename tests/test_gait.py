@@ -11,14 +11,15 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from biped_gait.core.configurations import GaitMode
-from biped_gait.core.hybrid import P_INVERSE, P_MATRIX
-from biped_gait.core.bvp import solve_bvp
-from biped_gait.core.settings import DEFAULTS
-from biped_gait.core.planner import GaitPlanner, GaitRequest
-from biped_gait.core.impulses import I_MINUS, I_PLUS, solve_impulses
-from biped_gait.core.reports import ground_reaction_momentum
-from biped_gait.core.samples import ground_reaction_inverse_dynamics
+from biped_gait.core.gait import views
+from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.core.dynamics.hybrid import P_INVERSE, P_MATRIX
+from biped_gait.core.gait.bvp import solve_bvp
+from biped_gait.core.dynamics.settings import DEFAULTS
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.dynamics.impulses import I_MINUS, I_PLUS, solve_impulses
+from biped_gait.core.gait.figures import ground_reaction_momentum
+from biped_gait.core.dynamics.samples import ground_reaction_inverse_dynamics
 
 from .conftest import DEFAULT_REQUEST, impact_problem
 
@@ -200,7 +201,7 @@ def test_a_solve_that_cannot_converge_says_so(planner):
     assert not bvp.converged and "no convergence in 1 Newton iterations" in bvp.message
     extreme = planner.plan(GaitRequest(step_length=1.7, period=0.05, arm_amplitude=1.5, mode="normal"))
     assert not extreme.admissible and extreme.reasons
-    json.loads(extreme.to_json())  # still serializable
+    json.loads(views.to_json(extreme))  # still serializable
 
 
 REQUIRED_KEYS = """step_length period arm_amplitude mode converged admissible theta W I_minus I_plus IR1_minus IR2
@@ -209,7 +210,7 @@ closure_residual solve_time_s""".split()
 
 
 def test_json_has_the_documented_keys(default_gait):
-    data = json.loads(default_gait.to_json())
+    data = json.loads(views.to_json(default_gait))
     missing = [k for k in REQUIRED_KEYS if k not in data]
     assert not missing
     assert len(data["I_minus"]) == 7 and len(data["Xd_a"]) == 12 and len(data["H_Tplus"]) == 2

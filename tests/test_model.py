@@ -9,11 +9,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from biped_gait.core.configurations import GaitMode, boundary_configurations
-from biped_gait.core.hybrid import MIRROR, P_MATRIX, exchange, locked_rotation
-from biped_gait.core.model import BipedModel
-from biped_gait.core.params import load_params
-from biped_gait.core.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
+from biped_gait.core.gait.configurations import GaitMode, boundary_configurations
+from biped_gait.core.dynamics.hybrid import MIRROR, P_MATRIX, exchange, locked_rotation
+from biped_gait.core.model.biped import BipedModel
+from biped_gait.core.model.params import load_params
+from biped_gait.core.model.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_positions
 
 pytestmark = pytest.mark.core
 

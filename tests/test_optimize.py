@@ -7,8 +7,8 @@ import math
 
 import pytest
 
-from biped_gait.core.planner import GaitPlanner, GaitRequest
-from biped_gait.core.settings import DEFAULTS
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.studies.optimize import (
     END_POINT,
     INTERIOR,
@@ -16,7 +16,7 @@ from biped_gait.studies.optimize import (
     compare_modes,
     optimal_arm_amplitude,
 )
-from biped_gait.core.params import load_params
+from biped_gait.core.model.params import load_params
 
 pytestmark = pytest.mark.studies
 

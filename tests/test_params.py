@@ -7,8 +7,8 @@ from importlib import resources
 import pytest
 import yaml
 
-from biped_gait.core.model import BipedModel
-from biped_gait.core.params import load_params, shipped_param_names
+from biped_gait.core.model.biped import BipedModel
+from biped_gait.core.model.params import load_params, shipped_param_names
 
 pytestmark = pytest.mark.core
 

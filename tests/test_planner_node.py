@@ -18,9 +18,9 @@ from mcap_ros2.reader import read_ros2_messages
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
 
-from biped_gait.core.model import JOINT_NAMES
-from biped_gait.core.planner import GaitRequest
-from biped_gait.core.urdf import PHYSICAL_JOINTS, physical_joint_array
+from biped_gait.core.model.biped import JOINT_NAMES
+from biped_gait.core.gait.planner import GaitRequest
+from biped_gait.core.model.urdf import PHYSICAL_JOINTS, physical_joint_array
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait

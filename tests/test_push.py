@@ -1,4 +1,4 @@
-"""Pushes on the trunk (core/push.py) and momentum steering (core/steering.py): the velocity jump
+"""Pushes on the trunk (core/walking/push.py) and momentum steering (core/walking/steering.py): the velocity jump
 is the impulse's, a push splits the step where it acts, the steered re-aim's gains are those of
 the plain re-aim's linearization, the steered closed loop contracts at its rate, and a push is
 recovered to within 1e-3 of the orbit in 10 steps by steering, not by the plain re-aim."""
@@ -10,13 +10,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from biped_gait.core.configurations import THETA_DIRECTION
-from biped_gait.core.hybrid import MIRROR, exchange
-from biped_gait.core.model import cross
-from biped_gait.core.push import DIRECTIONS, Push, TrunkPush, horizontal_impulse
-from biped_gait.core.stability import closed_loop
-from biped_gait.core.steering import DEFAULT_RATE, momentum_row, pelvis_pitch, reference
-from biped_gait.core.walk import PlannedOrbit, StepSamples, Walk, Walker
+from biped_gait.core.gait.configurations import THETA_DIRECTION
+from biped_gait.core.dynamics.hybrid import MIRROR, exchange
+from biped_gait.core.model.biped import cross
+from biped_gait.core.walking.push import DIRECTIONS, Push, TrunkPush, horizontal_impulse
+from biped_gait.core.gait.stability import closed_loop
+from biped_gait.core.walking.steering import DEFAULT_RATE, momentum_row, pelvis_pitch, reference
+from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker
 
 pytestmark = pytest.mark.core
 

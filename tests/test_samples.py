@@ -8,9 +8,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from biped_gait.core.reports import step_figures
-from biped_gait.core.samples import JointPlacements, SampleEvaluator, ground_reaction_inverse_dynamics
-from biped_gait.core.world import WorldView
+from biped_gait.core.gait.figures import step_figures
+from biped_gait.core.dynamics.samples import JointPlacements, SampleEvaluator, ground_reaction_inverse_dynamics
+from biped_gait.core.walking.world import WorldView
 
 pytestmark = pytest.mark.core
 

@@ -20,7 +20,7 @@ from sensor_msgs.msg import JointState
 
 from biped_gait.cli import main as cli_main
 from biped_gait.recording.recover import is_complete
-from biped_gait.core.urdf import PHYSICAL_JOINTS
+from biped_gait.core.model.urdf import PHYSICAL_JOINTS
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 

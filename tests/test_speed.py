@@ -1,4 +1,4 @@
-"""Walking at a commanded speed (core/speed.py, core/transitions.py): the speed rules pick
+"""Walking at a commanded speed (core/walking/speed.py, core/walking/transitions.py): the speed rules pick
 walkable gaits with L / T the speed, clamp outside their range; the follower walks a ramp of
 speeds with transition steps, on each gait's speed after its transition, each transition solved
 within 50 ms of CPU time."""
@@ -12,14 +12,14 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-from biped_gait.core.atlas import Atlas, Grid, NodeStatus
-from biped_gait.core.configurations import GaitMode
-from biped_gait.core.params import load_params
-from biped_gait.core.planner import GaitRequest
-from biped_gait.core.settings import DEFAULTS
-from biped_gait.core.speed import MAX_SLOPE, FixedCadence, LeastEffort, walkable_nodes
-from biped_gait.core.transitions import SpeedFollower
-from biped_gait.core.walk import PlannedOrbit, Walker
+from biped_gait.core.gait.atlas import Atlas, Grid, NodeStatus
+from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.core.model.params import load_params
+from biped_gait.core.gait.planner import GaitRequest
+from biped_gait.core.dynamics.settings import DEFAULTS
+from biped_gait.core.walking.speed import MAX_SLOPE, FixedCadence, LeastEffort, walkable_nodes
+from biped_gait.core.walking.transitions import SpeedFollower
+from biped_gait.core.walking.walk import PlannedOrbit, Walker
 from biped_gait.studies.atlas_build import build_atlas
 
 pytestmark = pytest.mark.core

@@ -9,8 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from biped_gait.core.stability import PoincareMap, closed_loop, multipliers_of
-from biped_gait.core.walk import PlannedOrbit, Walker
+from biped_gait.core.gait.stability import PoincareMap, closed_loop, multipliers_of
+from biped_gait.core.walking.walk import PlannedOrbit, Walker
 
 pytestmark = pytest.mark.core
 

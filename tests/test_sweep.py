@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from biped_gait.studies.executors import open_executor
-from biped_gait.core.planner import GaitRequest
-from biped_gait.core.params import load_params
+from biped_gait.core.gait.planner import GaitRequest
+from biped_gait.core.model.params import load_params
 from biped_gait.studies.sweep import (
     MAX_CASES,
     SweepGrid,

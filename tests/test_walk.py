@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.core.hybrid import TouchdownGuard
-from biped_gait.core.planner import GaitRequest
-from biped_gait.core.walk import PlannedOrbit, Sample, StepSamples, Walk, Walker
+from biped_gait.core.dynamics.hybrid import TouchdownGuard
+from biped_gait.core.gait.planner import GaitRequest
+from biped_gait.core.walking.walk import PlannedOrbit, Sample, StepSamples, Walk, Walker
 
 pytestmark = pytest.mark.core
 

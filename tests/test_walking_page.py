@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from biped_gait.cli import main as cli_main
-from biped_gait.core.params import load_params
-from biped_gait.core.planner import GaitRequest
-from biped_gait.core.steering import DEFAULT_RATE
+from biped_gait.core.model.params import load_params
+from biped_gait.core.gait.planner import GaitRequest
+from biped_gait.core.walking.steering import DEFAULT_RATE
 from biped_gait.studies.figures import save
 from biped_gait.studies.push_study import MAX_IMPULSE, run_push_study
 from biped_gait.studies.walking_page import Walking, closed_loop_radius, speed_ramp, walking_figures, walking_section

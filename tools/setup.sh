@@ -18,9 +18,9 @@ fi
 # The compiled twins of the ballistic flow and of the sample evaluation (C++ over the wheels'
 # Pinocchio), rebuilt when their sources change.
 nstamp=.venv/.native.sha
-nwant=$(cat biped_gait/core/native/*.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
-if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/_flow_native*.so > /dev/null 2>&1 \
-    || ! ls biped_gait/core/_samples_native*.so > /dev/null 2>&1; then
+nwant=$(cat biped_gait/core/dynamics/native/*.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/dynamics/_flow_native*.so > /dev/null 2>&1 \
+    || ! ls biped_gait/core/dynamics/_samples_native*.so > /dev/null 2>&1; then
   bash tools/build_native.sh
   echo "$nwant" > "$nstamp"
 fi

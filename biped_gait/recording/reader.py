@@ -18,7 +18,7 @@ from mcap.summary import Summary
 from mcap.writer import MCAP0_MAGIC
 from mcap_ros2.decoder import DecoderFactory
 
-from ..core.yaml_files import load_yaml_file, parse_yaml
+from ..core.model.yaml_files import load_yaml_file, parse_yaml
 from .metadata import METADATA_NAME
 
 MAX_METADATA_BYTES = 16 * 1024 * 1024  # a metadata.yaml is a few kB per topic

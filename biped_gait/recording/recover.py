@@ -11,7 +11,7 @@ from mcap.records import Channel, Message, Schema
 from mcap.stream_reader import StreamReader
 from mcap.writer import MCAP0_MAGIC, Writer as RawWriter
 
-from ..core.yaml_files import parse_yaml
+from ..core.model.yaml_files import parse_yaml
 from .metadata import TopicRecord, write_metadata
 
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-from ..core.configurations import GaitMode
+from ..core.gait.configurations import GaitMode
 
 JOINT_STATES = "/joint_states"
 ODOM = "/odom"

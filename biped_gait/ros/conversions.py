@@ -1,5 +1,5 @@
 """Translation between ROS messages and the core's objects. No physics here: field-by-field
-conversion driven by the core's field list (``core.gait_views.FIELDS``), units unchanged (SI,
+conversion driven by the core's field list (``core.gait.views.FIELDS``), units unchanged (SI,
 radians). The gait mode is parsed here, at the edge, from the messages' codes.
 """
 
@@ -15,13 +15,13 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
-from ..core.configurations import GaitMode
-from ..core.gait import Gait
-from ..core.gait_views import FIELDS
-from ..core.impulses import EffortOptions
-from ..core.planner import GaitRequest
-from ..core.urdf import PHYSICAL_JOINTS, joint_roles, physical_joint_array
-from ..core.walk import PlannedOrbit
+from ..core.gait.configurations import GaitMode
+from ..core.gait.gait import Gait
+from ..core.gait.views import FIELDS
+from ..core.dynamics.impulses import EffortOptions
+from ..core.gait.planner import GaitRequest
+from ..core.model.urdf import PHYSICAL_JOINTS, joint_roles, physical_joint_array
+from ..core.walking.walk import PlannedOrbit
 from ..recording.topics import MODE_CODES
 
 MODE_TO_MSG = {mode: code for code, mode in MODE_CODES.items()}

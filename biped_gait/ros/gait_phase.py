@@ -9,7 +9,7 @@ from std_msgs.msg import Header
 
 from biped_gait_interfaces.msg import GaitPhase
 
-from ..core.world import WORLD_FRAME
+from ..core.walking.world import WORLD_FRAME
 from .walk_messages import stamp_msg
 
 STANCE = {"left": GaitPhase.LEFT_STANCE, "right": GaitPhase.RIGHT_STANCE}

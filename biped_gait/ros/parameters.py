@@ -14,8 +14,8 @@ from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescri
 from rclpy.exceptions import InvalidParameterTypeException, ParameterException
 from rclpy.node import Node
 
-from ..core.text import clip
-from ..core.yaml_files import load_yaml_file
+from ..core.model.text import clip
+from ..core.model.yaml_files import load_yaml_file
 
 PARAMS_KEY = "ros__parameters"
 TYPE_NAMES = {bool: "true or false", int: "an integer", float: "a floating-point number (e.g. 1.0, not 1)",

@@ -41,10 +41,10 @@ from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
-from ..core.params import DEFAULT_PARAMS, load_params, shipped_param_names
-from ..core.planner import GaitPlanner
-from ..core.settings import DEFAULTS
-from ..core.text import clip
+from ..core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from ..core.gait.planner import GaitPlanner
+from ..core.dynamics.settings import DEFAULTS
+from ..core.model.text import clip
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude

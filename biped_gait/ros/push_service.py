@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.push import Push
-from ..core.walk import Walker
+from ..core.walking.push import Push
+from ..core.walking.walk import Walker
 
 SCRIPT_FORMAT = "STEP PHASE PX PY PZ, groups separated by ';'"
 

@@ -60,15 +60,15 @@ from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent, GaitPhase, GaitPlan
 from biped_gait_interfaces.srv import PlanGait, Push
 
-from ..core.configurations import GaitMode
-from ..core.pacing import Pacer
-from ..core.params import load_params, shipped_param_names
-from ..core.push import AppliedPush
-from ..core.settings import DEFAULTS
-from ..core.steering import DEFAULT_RATE
-from ..core.text import clip
-from ..core.transitions import MAX_CHANGE, SPEED_RULES
-from ..core.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
+from ..core.gait.configurations import GaitMode
+from ..core.walking.pacing import Pacer
+from ..core.model.params import load_params, shipped_param_names
+from ..core.walking.push import AppliedPush
+from ..core.dynamics.settings import DEFAULTS
+from ..core.walking.steering import DEFAULT_RATE
+from ..core.model.text import clip
+from ..core.walking.transitions import MAX_CHANGE, SPEED_RULES
+from ..core.walking.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess

@@ -16,9 +16,9 @@ import threading
 from geometry_msgs.msg import Twist
 from rclpy.node import Node
 
-from ..core.settings import DEFAULTS
-from ..core.transitions import SpeedFollower, follower_for
-from ..core.walk import Walker
+from ..core.dynamics.settings import DEFAULTS
+from ..core.walking.transitions import SpeedFollower, follower_for
+from ..core.walking.walk import Walker
 
 
 class SpeedCommand:

@@ -1,4 +1,4 @@
-"""ROS messages of the walking robot: the sampled topics of one step (``core.world.WorldPictures``,
+"""ROS messages of the walking robot: the sampled topics of one step (``core.walking.world.WorldPictures``,
 SI units, world frame) serialized all at once, as joint states, odometry, angular momentum and
 transforms; the static transforms and the walk's events. No physics.
 
@@ -21,9 +21,9 @@ from tf2_msgs.msg import TFMessage
 
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from ..core.urdf import PHYSICAL_JOINTS
-from ..core.walk import Touchdown
-from ..core.world import BASE_FRAME, WORLD_FRAME, Transform as WorldTransform, WorldPictures
+from ..core.model.urdf import PHYSICAL_JOINTS
+from ..core.walking.walk import Touchdown
+from ..core.walking.world import BASE_FRAME, WORLD_FRAME, Transform as WorldTransform, WorldPictures
 from ..recording import topics
 from .cdr_templates import CdrTemplate
 

@@ -1,11 +1,11 @@
-"""Building a gait atlas (``core.atlas``) by continuation from the known human-like gait.
+"""Building a gait atlas (``core.gait.atlas``) by continuation from the known human-like gait.
 
 1. The spine: the human-like gait at L = T = 0.45 s (the straight-line cold start finds it
    there), continued in alpha to every alpha of the grid at that (L, T) node.
 2. One task per alpha (run on any ``concurrent.futures.Executor``, local processes or Dask): a
    breadth-first walk over the (L, T) plane from the spine's node, each node solved warm from an
    already solved neighbour on the branch; where the direct warm start fails or leaves the
-   branch, a continuation with step halving (``core.continuation``) bridges the gap.
+   branch, a continuation with step halving (``core.gait.continuation``) bridges the gap.
 3. Nodes the walk does not reach are solved cold: a human-like result counts by its verdict, a
    backward-knee one marks the node TWIN_ONLY, none NO_CONVERGENCE.
 
@@ -22,13 +22,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.admissibility import KNEE_TOLERANCE, Limit
-from ..core.atlas import Atlas, Grid, NodeStatus
-from ..core.configurations import GaitMode
-from ..core.continuation import BRANCH_JUMP, continue_to
-from ..core.gait import Gait
-from ..core.params import BipedParams
-from ..core.planner import SEED, GaitPlanner, GaitRequest
+from ..core.gait.admissibility import KNEE_TOLERANCE, Limit
+from ..core.gait.atlas import Atlas, Grid, NodeStatus
+from ..core.gait.configurations import GaitMode
+from ..core.gait.continuation import BRANCH_JUMP, continue_to
+from ..core.gait.gait import Gait
+from ..core.model.params import BipedParams
+from ..core.gait.planner import SEED, GaitPlanner, GaitRequest
 from .executors import planner_for
 
 NEIGHBOURS = ((1, 0), (-1, 0), (0, 1), (0, -1))

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..core.params import BipedParams
-from ..core.planner import GaitRequest
+from ..core.model.params import BipedParams
+from ..core.gait.planner import GaitRequest
 from .executors import planner_for
 from .optimize import COARSE_STEP, ModeComparison, compare_modes
 

@@ -16,8 +16,8 @@ from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 
-from ..core.planner import GaitPlanner
-from ..core.params import BipedParams
+from ..core.gait.planner import GaitPlanner
+from ..core.model.params import BipedParams
 
 _local = threading.local()
 

@@ -19,9 +19,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from ..core.configurations import GaitMode
+from ..core.gait.configurations import GaitMode
 from .optimize import ArmOptimum
-from ..core.gait import Gait
+from ..core.gait.gait import Gait
 
 LINE_STYLES = {GaitMode.NORMAL.value: "-", GaitMode.ANTI_NORMAL.value: "--"}
 DPI = 120

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.configurations import GaitMode
-from ..core.gait import Gait
-from ..core.params import BipedParams
-from ..core.planner import GaitRequest
-from ..core.world import WorldView
+from ..core.gait.configurations import GaitMode
+from ..core.gait.gait import Gait
+from ..core.model.params import BipedParams
+from ..core.gait.planner import GaitRequest
+from ..core.walking.world import WorldView
 from .executors import planner_for
 from .optimize import COARSE_STEP, optimal_arm_amplitude
 

@@ -25,11 +25,11 @@ from matplotlib.colors import BoundaryNorm, ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
-from ..core.admissibility import LIMIT_NAMES, Limit
-from ..core.atlas import Atlas, NodeStatus, atlas_path
-from ..core.configurations import GaitMode
-from ..core.params import BipedParams
-from ..core.planner import GaitRequest
+from ..core.gait.admissibility import LIMIT_NAMES, Limit
+from ..core.gait.atlas import Atlas, NodeStatus, atlas_path
+from ..core.gait.configurations import GaitMode
+from ..core.model.params import BipedParams
+from ..core.gait.planner import GaitRequest
 from .executors import planner_for
 from .optimize import COARSE_STEP, NoAdmissibleGait, compare_modes
 

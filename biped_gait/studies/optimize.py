@@ -17,12 +17,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from ..core.configurations import GaitMode
+from ..core.gait.configurations import GaitMode
 from .executors import planner_for
-from ..core.planner import GaitPlanner, GaitRequest, validate_request
-from ..core.params import BipedParams
-from ..core.settings import DEFAULTS
-from ..core.gait import Gait
+from ..core.gait.planner import GaitPlanner, GaitRequest, validate_request
+from ..core.model.params import BipedParams
+from ..core.dynamics.settings import DEFAULTS
+from ..core.gait.gait import Gait
 from .sweep import inclusive_range, solve_chain, solve_near
 
 ALPHA_RANGE = DEFAULTS.arm_range  # rad: the paper's Fig. 4 range

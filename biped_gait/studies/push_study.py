@@ -32,12 +32,12 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from tqdm import tqdm
 
-from ..core.hybrid import HybridStep
-from ..core.params import BipedParams
-from ..core.planner import GaitRequest
-from ..core.push import DIRECTIONS, Push, horizontal_impulse
-from ..core.steering import DEFAULT_RATE
-from ..core.walk import PlannedOrbit, Walker
+from ..core.dynamics.hybrid import HybridStep
+from ..core.model.params import BipedParams
+from ..core.gait.planner import GaitRequest
+from ..core.walking.push import DIRECTIONS, Push, horizontal_impulse
+from ..core.walking.steering import DEFAULT_RATE
+from ..core.walking.walk import PlannedOrbit, Walker
 from .executors import planner_for
 
 RECOVERY_STEPS = 10

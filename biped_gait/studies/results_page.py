@@ -17,11 +17,11 @@ from concurrent.futures import Executor
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..core.atlas import Atlas, atlas_path
-from ..core.configurations import GaitMode
-from ..core.gait import Gait
-from ..core.params import DEFAULT_PARAMS, load_params
-from ..core.planner import GaitPlanner, GaitRequest
+from ..core.gait.atlas import Atlas, atlas_path
+from ..core.gait.configurations import GaitMode
+from ..core.gait.gait import Gait
+from ..core.model.params import DEFAULT_PARAMS, load_params
+from ..core.gait.planner import GaitPlanner, GaitRequest
 from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
 from .human_walking import human_comparison

@@ -12,12 +12,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..core.configurations import GaitMode
-from ..core.gait import Gait
-from ..core.params import BipedParams
-from ..core.planner import GaitRequest
-from ..core.stability import Multipliers, closed_loop
-from ..core.walk import PlannedOrbit, Walker
+from ..core.gait.configurations import GaitMode
+from ..core.gait.gait import Gait
+from ..core.model.params import BipedParams
+from ..core.gait.planner import GaitRequest
+from ..core.gait.stability import Multipliers, closed_loop
+from ..core.walking.walk import PlannedOrbit, Walker
 from .executors import planner_for
 
 

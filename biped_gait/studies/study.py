@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 from matplotlib.figure import Figure
 from tqdm import tqdm
 
-from ..core.configurations import GaitMode
+from ..core.gait.configurations import GaitMode
 from .figures import effort_figure, momentum_figure
 from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum, ModeComparison, compare_modes
-from ..core.params import BipedParams
-from ..core.gait import Gait
+from ..core.model.params import BipedParams
+from ..core.gait.gait import Gait
 from .sweep import SweepGrid, inclusive_range, run_chain
 
 FIG4_STEP_LENGTHS = (0.40, 0.45, 0.50)  # m

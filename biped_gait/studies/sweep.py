@@ -18,12 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.configurations import GaitMode
+from ..core.gait.configurations import GaitMode
 from .executors import planner_for
-from ..core.planner import GaitPlanner, GaitRequest, validate_request
-from ..core.params import BipedParams
-from ..core.settings import DEFAULTS
-from ..core.gait import Gait
+from ..core.gait.planner import GaitPlanner, GaitRequest, validate_request
+from ..core.model.params import BipedParams
+from ..core.dynamics.settings import DEFAULTS
+from ..core.gait.gait import Gait
 
 MAX_CASES = 2000  # a larger sweep must be confirmed (CLI: --yes)
 MAX_AXIS_VALUES = 100_000  # values one range may produce

@@ -2,7 +2,7 @@
 interrupted sweep keeps its rows) and ``sweep.json`` (the grid and every gait, written when
 the sweep ends or is interrupted, with ``complete`` saying which).
 
-Every figure of ``Gait.to_dict(trajectory=False)`` (``core.gait_views.FIELDS``) is kept, SI with radians, plus
+Every figure of ``views.to_dict(gait, trajectory=False)`` (``core.gait.views.FIELDS``) is kept, SI with radians, plus
 ``arm_amplitude_deg`` for reading; in the CSV, list values are JSON text and NaN is empty.
 """
 
@@ -16,8 +16,9 @@ import os
 from pathlib import Path
 from types import TracebackType
 
-from ..core.gait import Gait
-from ..core.gait_views import FIELDS
+from ..core.gait import views
+from ..core.gait.gait import Gait
+from ..core.gait.views import FIELDS
 from .sweep import SweepGrid
 
 CSV_NAME = "sweep.csv"
@@ -42,7 +43,7 @@ def csv_columns() -> list[str]:
 
 def case_record(result: Gait) -> dict:
     """A gait as a JSON-ready dict with ``arm_amplitude_deg`` added."""
-    record = result.to_dict(trajectory=False)
+    record = views.to_dict(result, trajectory=False)
     record["arm_amplitude_deg"] = round(math.degrees(result.arm_amplitude), 9)
     return record
 

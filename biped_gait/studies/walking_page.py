@@ -18,15 +18,15 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ..core.configurations import GaitMode
-from ..core.gait import Gait
-from ..core.params import BipedParams
-from ..core.planner import GaitRequest
-from ..core.settings import DEFAULTS
-from ..core.stability import closed_loop
-from ..core.steering import DEFAULT_RATE
-from ..core.transitions import follower_for
-from ..core.walk import PlannedOrbit, Walker
+from ..core.gait.configurations import GaitMode
+from ..core.gait.gait import Gait
+from ..core.model.params import BipedParams
+from ..core.gait.planner import GaitRequest
+from ..core.dynamics.settings import DEFAULTS
+from ..core.gait.stability import closed_loop
+from ..core.walking.steering import DEFAULT_RATE
+from ..core.walking.transitions import follower_for
+from ..core.walking.walk import PlannedOrbit, Walker
 from .executors import planner_for
 from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushLimit, limit_vs_alpha_figure, polar_figure,
                          run_push_study)

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from enum import IntFlag
 
 from .bvp import BvpSolution
-from .impulses import ImpulseSolution
-from .reports import StepFigures
+from ..dynamics.impulses import ImpulseSolution
+from .figures import StepFigures
 
 GRF_MARGIN = 0.0  # N
 HEIGHT_MARGIN = 0.0  # m

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .flow import BallisticFlow
-from .hybrid import HybridStep, exchange
+from ..dynamics.flow import BallisticFlow
+from ..dynamics.hybrid import HybridStep, exchange
 
 FD_STEP = 1e-6  # rad: central differences of the reset's configuration dependence
 

@@ -12,12 +12,11 @@ import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:  # the views read a Gait; gait.py imports this module
-    from .gait import Gait
+from .gait import Gait
 
 NAN = math.nan
 
@@ -29,16 +28,16 @@ class Field:
     ``vector`` for a geometry_msgs/Vector3."""
 
     key: str
-    read: Callable[["Gait"], Any]
+    read: Callable[[Gait], Any]
     msg: str | None = None
     size: int | None = None
     vector: bool = False
 
 
-def _ds(attr: str, empty: Any = NAN, when: str = "any") -> Callable[["Gait"], Any]:
+def _ds(attr: str, empty: Any = NAN, when: str = "any") -> Callable[[Gait], Any]:
     """A double-support figure; ``when='solved'``: only where its impulse problem was solved."""
 
-    def read(gait: "Gait") -> Any:
+    def read(gait: Gait) -> Any:
         ds = gait.double_support
         if ds is None or (when == "solved" and not ds.impulses.success):
             return empty
@@ -47,27 +46,27 @@ def _ds(attr: str, empty: Any = NAN, when: str = "any") -> Callable[["Gait"], An
     return read
 
 
-def _impulse(attr: str, empty: Any = ()) -> Callable[["Gait"], Any]:
+def _impulse(attr: str, empty: Any = ()) -> Callable[[Gait], Any]:
     """A part of the impulse solution (``empty`` where it was not solved)."""
 
-    def read(gait: "Gait") -> Any:
+    def read(gait: Gait) -> Any:
         ds = gait.double_support
         return getattr(ds.impulses, attr) if ds is not None and ds.impulses.success else empty
 
     return read
 
 
-def _figure(attr: str, empty: Any = NAN) -> Callable[["Gait"], Any]:
+def _figure(attr: str, empty: Any = NAN) -> Callable[[Gait], Any]:
     return lambda gait: getattr(gait.figures, attr) if gait.figures is not None else empty
 
 
-def _closure_residual(gait: "Gait") -> float:
+def _closure_residual(gait: Gait) -> float:
     """z_d^T D_e (Xd^a - Xd^b) (kg m^2/s) as the double support saw it (after the slack
     correction), else the BVP's closure gap."""
     return gait.double_support.impulses.closure_residual if gait.double_support is not None else gait.step.closure_gap
 
 
-def _trajectory(gait: "Gait") -> dict:
+def _trajectory(gait: Gait) -> dict:
     figures = gait.figures
     if figures is None or figures.samples is None:
         return {}
@@ -157,17 +156,17 @@ def clean(value: Any) -> Any:
     return value
 
 
-def to_dict(gait: "Gait", trajectory: bool = True) -> dict:
+def to_dict(gait: Gait, trajectory: bool = True) -> dict:
     """The gait's flat figures as a JSON-ready dictionary, in ``FIELDS`` order."""
     return {f.key: clean(f.read(gait)) for f in FIELDS if trajectory or f.key != "trajectory"}
 
 
-def to_json(gait: "Gait", trajectory: bool = True) -> str:
+def to_json(gait: Gait, trajectory: bool = True) -> str:
     """JSON text of ``to_dict``."""
     return json.dumps(to_dict(gait, trajectory), indent=1)
 
 
-def summary(gait: "Gait") -> str:
+def summary(gait: Gait) -> str:
     """A readable multi-line summary (degrees where people expect them)."""
     deg = math.degrees
     d = {f.key: f.read(gait) for f in FIELDS if f.key != "trajectory"}

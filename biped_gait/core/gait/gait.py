@@ -3,8 +3,8 @@ ballistic step (the BVP's solution), the double support, the step's figures, and
 
 SI units, angles in radians. Velocities in extended coordinates X = [x0, y0, z0, q1..q9] are in
 the step's frame: stance leg 1 on the right, stance tip at the world origin. The JSON form, the
-printed summary and the ROS message are views of a ``Gait`` (``gait_views``), all driven by one
-field list.
+printed summary and the ROS message are views of a ``Gait`` (``views``, which imports this module;
+this one imports no view), all driven by one field list.
 """
 
 from __future__ import annotations
@@ -17,9 +17,8 @@ import numpy as np
 from .admissibility import Verdict, failure_message
 from .bvp import BvpSolution
 from .configurations import GaitMode
-from .gait_views import summary, to_dict, to_json
-from .impulses import EffortOptions, ImpulseSolution
-from .reports import StepFigures
+from ..dynamics.impulses import EffortOptions, ImpulseSolution
+from .figures import StepFigures
 from .stability import Multipliers
 
 
@@ -123,14 +122,3 @@ class Gait:
         figures = self.figures.without_samples() if self.figures is not None else None
         return replace(self, step=replace(self.step, nodes=None), figures=figures)
 
-    def to_dict(self, trajectory: bool = True) -> dict:
-        """Plain JSON-ready dictionary (NaN as null), keys from ``gait_views.FIELDS``."""
-        return to_dict(self, trajectory)
-
-    def to_json(self, trajectory: bool = True) -> str:
-        """JSON text of ``to_dict``."""
-        return to_json(self, trajectory)
-
-    def summary(self) -> str:
-        """A readable multi-line summary (degrees where people expect them)."""
-        return summary(self)

@@ -16,10 +16,10 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 import pinocchio as pin
 
-from .hybrid import mirror_for
-from .model import BipedModel
-from .samples import JointPlacements, SampleEvaluator
-from .urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_array
+from ..dynamics.hybrid import mirror_for
+from ..model.biped import BipedModel
+from ..dynamics.samples import JointPlacements, SampleEvaluator
+from ..model.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_array
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"

@@ -25,14 +25,14 @@ from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
 from .continuation import continue_to
-from .flow import hermite_samples
+from ..dynamics.flow import hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem
-from .hybrid import HybridStep
-from .impulses import EFFORTS, EffortOptions, friction_ratios, solve_impulses
-from .model import BipedModel
-from .params import BipedParams, load_params
-from .reports import StepFigures, energy_drift, step_figures
-from .settings import DEFAULTS, Settings
+from ..dynamics.hybrid import HybridStep
+from ..dynamics.impulses import EFFORTS, EffortOptions, friction_ratios, solve_impulses
+from ..model.biped import BipedModel
+from ..model.params import BipedParams, load_params
+from .figures import StepFigures, energy_drift, step_figures
+from ..dynamics.settings import DEFAULTS, Settings
 from .stability import open_loop
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import newton
+from ..dynamics import newton
 from .configurations import THETA_DIRECTION, GaitMode, boundary_configurations
-from .flow import BallisticFlow, FlowResult
-from .hybrid import HybridStep
-from .settings import DEFAULTS, Settings
+from ..dynamics.flow import BallisticFlow, FlowResult
+from ..dynamics.hybrid import HybridStep
+from ..dynamics.settings import DEFAULTS, Settings
 
 CLOSURES = ("theta", "slack")
 # How the solver's outcomes read in a gait's message.

@@ -1,4 +1,4 @@
-// Compiled twin of biped_gait.core.samples: many single-support states (q, qd), one per row, evaluated
+// Compiled twin of biped_gait.core.dynamics.samples: many single-support states (q, qd), one per row, evaluated
 // in one call with the same Pinocchio algorithms as the Python loop there. The stance tip is at the
 // world origin; vectors are in world axes unless said otherwise. Units: m, rad, s, kg, N.
 #include <pinocchio/multibody.hpp>
@@ -199,7 +199,7 @@ class NativePlacements {
 };
 
 PYBIND11_MODULE(_samples_native, m) {
-  m.doc() = "Compiled evaluation of many biped states at once (see biped_gait/core/samples.py).";
+  m.doc() = "Compiled evaluation of many biped states at once (see biped_gait/core/dynamics/samples.py).";
   py::class_<NativeSamples>(m, "NativeSamples")
       .def(py::init<const std::string&, const std::string&, int, int, std::vector<int>, std::vector<int>, double>(),
            py::arg("single_text"), py::arg("extended_text"), py::arg("swing_tip"), py::arg("pelvis"), py::arg("links"),

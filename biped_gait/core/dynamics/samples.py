@@ -19,7 +19,7 @@ for each row:
 frame (the URDF's link transforms) for many configurations.
 
 Vectors are in world axes, model frame (stance leg 1 on the right), unless said otherwise. Each
-runs in the compiled twin (core/native/samples.cpp, built by tools/build_native.sh) when it is
+runs in the compiled twin (core/dynamics/native/samples.cpp, built by tools/build_native.sh) when it is
 built (``native=None``) or in the Python loops below (``native=False``): the same Pinocchio
 algorithms, the same results to rounding (tests/test_samples.py).
 """
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .model import JOINT_NAMES, SWING_TIP, BipedModel
+from ..model.biped import JOINT_NAMES, SWING_TIP, BipedModel
 
 try:
     from ._samples_native import NativePlacements, NativeSamples

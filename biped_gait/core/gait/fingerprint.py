@@ -15,14 +15,15 @@ from dataclasses import asdict
 from functools import lru_cache
 from pathlib import Path
 
-from .params import BipedParams
+from ..model.params import BipedParams
 
 ATLAS_FORMAT = 3
-_CORE = Path(__file__).resolve().parent
-# The modules whose code decides a gait's solution and verdict.
-MODEL_CODE = ("model.py", "configurations.py", "rk8_tableau.py", "flow.py", "hybrid.py", "newton.py",
-              "bvp.py", "impulses.py", "samples.py", "reports.py", "admissibility.py", "stability.py",
-              "settings.py", "native/flow.cpp", "native/samples.cpp")
+_CORE = Path(__file__).resolve().parents[1]
+# The modules whose code decides a gait's solution and verdict (paths in the core).
+MODEL_CODE = ("model/biped.py", "gait/configurations.py", "dynamics/rk8_tableau.py", "dynamics/flow.py",
+              "dynamics/hybrid.py", "dynamics/newton.py", "gait/bvp.py", "dynamics/impulses.py", "dynamics/samples.py",
+              "gait/figures.py", "gait/admissibility.py", "gait/stability.py", "dynamics/settings.py",
+              "dynamics/native/flow.cpp", "dynamics/native/samples.cpp")
 
 
 def _strip_docstrings(tree: ast.AST) -> ast.AST:

@@ -73,7 +73,7 @@ def load_params(name_or_path: str | Path | None = None) -> BipedParams:
     """Load a shipped parameter set by name, or a YAML file by path (``None``: the default).
 
     Raises ``ValueError`` with a one-line message for an unknown name, an unreadable file (one
-    larger than ``core.yaml_files.MAX_YAML_BYTES``, not UTF-8, or nested too deeply included),
+    larger than ``core.model.yaml_files.MAX_YAML_BYTES``, not UTF-8, or nested too deeply included),
     or missing or non-physical values.
     """
     key = DEFAULT_PARAMS if name_or_path in (None, "") else str(name_or_path)

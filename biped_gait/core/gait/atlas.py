@@ -32,7 +32,7 @@ from .admissibility import Limit, describe
 from .configurations import GaitMode
 from .continuation import SPACING
 from .fingerprint import ATLAS_FORMAT, model_fingerprint
-from .params import BipedParams, load_params, shipped_param_names
+from ..model.params import BipedParams, load_params, shipped_param_names
 
 STEP_LENGTHS = np.round(np.arange(0.25, 0.65 + 1e-9, 0.025), 6)  # m
 PERIODS = np.round(np.arange(0.30, 0.65 + 1e-9, 0.025), 6)  # s

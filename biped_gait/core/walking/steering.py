@@ -47,10 +47,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import newton
-from .configurations import THETA_DIRECTION
-from .flow import BallisticFlow
-from .hybrid import HybridStep, ImpactMap, exchange
+from ..dynamics import newton
+from ..gait.configurations import THETA_DIRECTION
+from ..dynamics.flow import BallisticFlow
+from ..dynamics.hybrid import HybridStep, ImpactMap, exchange
 
 DEFAULT_RATE = 0.25
 """rho: the momentum error's contraction per step (0: dead-beat). Of 0, 0.1, 0.25 and 0.35 at the

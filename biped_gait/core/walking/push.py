@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .hybrid import mirror_for
-from .model import BipedModel
+from ..dynamics.hybrid import mirror_for
+from ..model.biped import BipedModel
 
 TRUNK_JOINT = "torso_yaw"  # the trunk hangs on the torso-yaw joint (model.py)
 DIRECTIONS = {"forward": 0.0, "left": math.pi / 2, "backward": math.pi, "right": -math.pi / 2}

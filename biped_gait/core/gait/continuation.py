@@ -16,9 +16,9 @@ import numpy as np
 
 from .bvp import solve_bvp
 from .configurations import GaitMode
-from .flow import BallisticFlow
-from .hybrid import HybridStep
-from .settings import Settings
+from ..dynamics.flow import BallisticFlow
+from ..dynamics.hybrid import HybridStep
+from ..dynamics.settings import Settings
 
 MAX_STEP = 1.0  # grid spacings of the atlas (0.025 m, 0.025 s, 5 deg) per continuation step
 MIN_STEP = 1.0 / 64.0  # below this the path is given up

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .model import JOINT_NAMES
+from .biped import JOINT_NAMES
 from .params import BipedParams, Link
 
 PHYSICAL_JOINTS = (

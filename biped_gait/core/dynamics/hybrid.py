@@ -31,7 +31,7 @@ from scipy.optimize import brentq
 
 from .flow import BallisticFlow, hermite_samples
 from .impulses import ImpactProblem
-from .model import BipedModel
+from ..model.biped import BipedModel
 from .samples import SampleEvaluator
 
 # The configuration map at double support, q' = P q (docs/model.md section 5): rows q1'..q9'.

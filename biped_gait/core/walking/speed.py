@@ -36,9 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .atlas import Atlas, Grid, NodeStatus
-from .configurations import boundary_configurations
-from .hybrid import HybridStep
+from ..gait.atlas import Atlas, Grid, NodeStatus
+from ..gait.configurations import boundary_configurations
+from ..dynamics.hybrid import HybridStep
 
 SPEED_STEP = 0.01  # m/s: spacing of the least-effort table
 PERIOD_STEP = 0.0025  # s: spacing of the periods tried along each speed line

@@ -48,7 +48,7 @@ class FlowResult:
 class BallisticFlow:
     """Fixed-grid RK8 integrator of the unactuated single-support dynamics, with sensitivities.
 
-    ``native``: run the grid in the compiled twin (core/native/flow.cpp, same scheme and
+    ``native``: run the grid in the compiled twin (core/dynamics/native/flow.cpp, same scheme and
     same Pinocchio algorithms, built by tools/setup.sh) - None: when it is built; False: the
     Python loop below. Both give the same results to rounding (tests/test_flow.py).
     """

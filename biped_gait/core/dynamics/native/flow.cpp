@@ -1,5 +1,5 @@
-// Compiled twin of biped_gait.core.flow.BallisticFlow.propagate: the same fixed-grid, 12-stage RK8
-// scheme (Dormand-Prince DOP853 tableau, passed in by the Python side, core/rk8_tableau.py) on the
+// Compiled twin of biped_gait.core.dynamics.flow.BallisticFlow.propagate: the same fixed-grid, 12-stage RK8
+// scheme (Dormand-Prince DOP853 tableau, passed in by the Python side, core/dynamics/rk8_tableau.py) on the
 // unactuated dynamics qdd = ABA(q, qd, 0), with the variational equations driven by
 // Pinocchio's analytical ABA derivatives. Units: rad, rad/s, rad/s^2, s.
 #include <pinocchio/multibody.hpp>

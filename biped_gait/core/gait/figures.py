@@ -15,8 +15,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
-from .model import BipedModel, cross
-from .samples import SampleEvaluator
+from ..model.biped import BipedModel, cross
+from ..dynamics.samples import SampleEvaluator
 
 
 @dataclass(frozen=True)

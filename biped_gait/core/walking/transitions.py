@@ -26,10 +26,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .atlas import Atlas, AtlasError, atlas_path
-from .bvp import solve_bvp
-from .planner import BRANCH_BOUND
-from .settings import Settings
+from ..gait.atlas import Atlas, AtlasError, atlas_path
+from ..gait.bvp import solve_bvp
+from ..gait.planner import BRANCH_BOUND
+from ..dynamics.settings import Settings
 from .speed import FixedCadence, LeastEffort, SpeedRule, walkable_nodes
 from .steering import pelvis_pitch
 from .walk import PlannedOrbit, Walker

@@ -23,8 +23,8 @@ itself (1 % per step); with ``momentum_rate`` the re-aim also steers it back to 
 (``steering``: the next touchdown's trunk pitch freed).
 
 Between steps the walker can be given a push on the trunk at a time in the next step
-(``push``, core/push.py: the step is split there) and another gait to aim at (``retarget``: the
-next step is a transition step, core/transitions.py).
+(``push``, core/walking/push.py: the step is split there) and another gait to aim at (``retarget``: the
+next step is a transition step, core/walking/transitions.py).
 
 Everything is in the model's coordinates (stance leg 1 on the right); ``stance_side`` says
 which physical foot that is, and ``stance_foot`` where it is in the world (m). Units SI, rad.
@@ -37,15 +37,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import newton
-from .configurations import GaitMode
-from .flow import hermite_samples
-from .hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
-from .impulses import EffortOptions, solve_impulses
-from .model import BipedModel
-from .params import load_params
+from ..dynamics import newton
+from ..gait.configurations import GaitMode
+from ..dynamics.flow import hermite_samples
+from ..dynamics.hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
+from ..dynamics.impulses import EffortOptions, solve_impulses
+from ..model.biped import BipedModel
+from ..model.params import load_params
 from .push import AppliedPush, Push, TrunkPush
-from .settings import DEFAULTS, Settings
+from ..dynamics.settings import DEFAULTS, Settings
 from .steering import MomentumSteering, SteeringFailed, reference
 from .world import WorldPictures, WorldState, WorldView
 
