@@ -48,7 +48,7 @@ from ..core.model.text import clip
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
-from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
+from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key, urdf_joints
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
@@ -213,8 +213,9 @@ class GaitPlannerNode(Node):
             response.plan = cached.compact if request.omit_trajectory else cached.plan
             response.message = f"{cached.message} (cached)"
             return
-        gait = self._planner(core_request.params, "service").plan(core_request)
-        plan = plan_msg(gait, self._header())
+        planner = self._planner(core_request.params, "service")
+        gait = planner.plan(core_request)
+        plan = plan_msg(gait, self._header(), urdf_joints(planner.model))
         response.success = gait.admissible
         if gait.admissible:
             response.message = f"admissible (found by {gait.found})"

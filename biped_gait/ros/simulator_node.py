@@ -186,6 +186,7 @@ class SimulatorNode(Node):
         self.clock = SimClock(self)
         self.controls = SimControls(self, self._group)
         self._messages: SampleMessages | None = None  # the sampled topics' templates, made with the first walk
+        self._actuated: tuple[str, ...] = ()  # the walked model's actuated joints: the events' impulses
         if self.source == "topic":
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
@@ -386,7 +387,9 @@ class SimulatorNode(Node):
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
                     momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step)
         if walk.world is not None and self._messages is None:
-            self._messages = SampleMessages(walk.world.link_frames)
+            self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
+        if walk.model is not None:
+            self._actuated = walk.model.actuated_names
         if walk.walker is not None:
             self.speed.start(walk.walker, orbit.params or None)
             self.pushes.start()
@@ -475,8 +478,8 @@ class SimulatorNode(Node):
     def _event(self, kind: int, step: int, side: str, time_in_step: float, base_ns: int, t: float, message: str,
                touchdown: Touchdown | None = None) -> None:
         stamp_ns = base_ns + round(t * 1e9)
-        self.pub_events.publish(event_msg(kind, step, side, time_in_step, stamp_msg(stamp_ns), message, touchdown),
-                                stamp_ns)
+        self.pub_events.publish(event_msg(kind, step, side, time_in_step, stamp_msg(stamp_ns), message, touchdown,
+                                          self._actuated), stamp_ns)
 
     def close(self) -> None:
         """Stop the walk and finalize the recording (shutdown, SIGINT and SIGTERM included);
