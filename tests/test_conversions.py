@@ -49,7 +49,7 @@ def test_every_message_field_of_the_field_list_carries_the_core_value(planner, d
             assert np.allclose(_as_list(got), _as_list(value), rtol=0, atol=0), field.key
         checked += 1
     # every GaitPlan field but the header, the mode code, the reasons and the trajectory with its joint mapping
-    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs"}
+    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs", "stride_effort"}
     assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons"} - trajectory)
     assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
     assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)
@@ -88,7 +88,7 @@ def test_requests_take_the_defaults_and_unknown_modes_are_refused():
     core = request_from_msg(req, "aoustin2013")
     assert core == GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013", "theta", "l1")
     assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1", None, math.inf, "joint",
-                                 None)
+                                 None, math.inf)
     with pytest.raises(ValueError, match="unknown gait mode 7"):
         request_from_msg(PlanGait.Request(mode=7), "aoustin2013")
 

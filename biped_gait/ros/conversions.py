@@ -16,7 +16,7 @@ from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.gait.configurations import GaitMode
-from ..core.gait.gait import Gait
+from ..core.gait.gait import Gait, Stride
 from ..core.gait.views import FIELDS
 from ..core.dynamics.impulses import EffortOptions
 from ..core.gait.planner import GaitRequest
@@ -53,6 +53,7 @@ def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
         rate_bound=req.rate_bound or math.inf,
         effort_coordinates=req.effort_coordinates or "joint",
         step_width=None if req.step_width == 0 or math.isnan(req.step_width) else req.step_width,
+        turn_radius=math.inf if req.turn_radius == 0 or math.isnan(req.turn_radius) else req.turn_radius,
     )
 
 
@@ -60,7 +61,7 @@ def request_key(request: GaitRequest) -> tuple:
     """Hashable identity of a request, for the planner's cache."""
     return (request.step_length, request.period, request.arm_amplitude, request.mode.value, request.params,
             request.closure, request.effort, request.friction, request.rate_bound, request.effort_coordinates,
-            request.step_width)
+            request.step_width, request.turn_radius)
 
 
 def duration_msg(seconds: float) -> Duration:
@@ -116,7 +117,17 @@ def plan_msg(gait: Gait, header, joints: UrdfJoints) -> GaitPlan:
             value = [float(v) for v in value]
         setattr(msg, f.msg, value)
     msg.trajectory.header = header
+    msg.stride_effort = gait.W
     return msg
+
+
+def stride_msgs(stride: Stride, header, joints: UrdfJoints) -> tuple[GaitPlan, list[GaitPlan]]:
+    """The GaitPlan messages of a stride's steps: the first (A, right foot) and the others (B),
+    each with the stride's effort."""
+    plans = [plan_msg(step, header, joints) for step in stride.steps]
+    for plan in plans:
+        plan.stride_effort = stride.W
+    return plans[0], plans[1:]
 
 
 def orbit_from_msg(msg: GaitPlan) -> PlannedOrbit:

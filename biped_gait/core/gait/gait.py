@@ -68,6 +68,7 @@ class DoubleSupport:
     new_stance_tip_speed_after: float
     impulse_friction_ratios: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     max_intermediate_joint_rate: float = math.nan
+    heading_change: float = 0.0  # rad: the next step's frame relative to this one's, mirrored (docs/model.md 5.2)
 
     @property
     def yaw_momentum_jump(self) -> float:

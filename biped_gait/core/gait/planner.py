@@ -366,6 +366,7 @@ class GaitPlanner:
             new_stance_tip_speed_after=speed_after,
             impulse_friction_ratios=friction_ratios(sol),
             max_intermediate_joint_rate=float(np.max(np.abs(sol.joint_rates))),
+            heading_change=self.hybrid.exchange.heading(q_t),
         )
 
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:

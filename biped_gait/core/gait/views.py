@@ -101,6 +101,7 @@ FIELDS: tuple[Field, ...] = (
     Field("theta", lambda g: g.step.theta, "theta"),
     Field("slack", _ds("slack", 0.0), "slack"),
     Field("W", lambda g: g.W, "effort_cost"),
+    Field("heading_change", _ds("heading_change"), "heading_change"),
     Field("I_minus", _impulse("i_minus"), "i_minus", array=True),
     Field("I_plus", _impulse("i_plus"), "i_plus", array=True),
     Field("IR1_minus", _impulse("ir1_minus"), "ir1_minus", vector=True),
