@@ -11,9 +11,9 @@ from enum import Enum
 from functools import lru_cache
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from ..model.biped import BipedModel
+from ..model.rotations import euler, rotation
 
 
 class GaitMode(str, Enum):
@@ -51,9 +51,6 @@ def arm_angles(arm_amplitude: float, mode: GaitMode) -> tuple[float, float]:
     return sign * arm_amplitude, -sign * arm_amplitude
 
 
-_ROTATIONS = {"x": lambda a: Rotation.from_rotvec([a, 0.0, 0.0]), "y": lambda a: Rotation.from_rotvec([0.0, a, 0.0])}
-
-
 class BoundaryConfigurations:
     """q(0) (stance leg in front) and q(T) (swing leg in front, its tip at (L, w, 0)) of the straight
     gaits of ``bm`` at step length L (m), arm amplitude alpha (rad), mode, trunk pitch theta
@@ -75,7 +72,7 @@ class BoundaryConfigurations:
         self._swing = {role: index(role, "swing") for role in p.joints.hip_roles}
         self._roll, self._pitch = index("ankle_roll"), index("ankle_pitch")
         self._arms = (index("shoulder", "stance"), index("shoulder", "swing"))
-        self._sequence = "".join(p.joints.role(role).axis for role in p.joints.hip_roles).upper()
+        self._sequence = "".join(p.joints.role(role).axis for role in p.joints.hip_roles)
         self.theta_direction = np.zeros(bm.nq)
         """d q / d theta at the hips' spacing, the same at both ends: +1 on the stance hip's pitch,
         -1 on the swing hip's (the pelvis and trunk pitch, the legs stay)."""
@@ -113,19 +110,19 @@ class BoundaryConfigurations:
         stance foot (reach = L at T, -L at 0)."""
         lateral = step_width / 2 - self.bm.params.hip_half_width  # the stance hip beside its foot (m, +y)
         height = math.sqrt(self.leg_length ** 2 - reach ** 2 / 4 - lateral ** 2)
-        pelvis = _ROTATIONS["y"](theta)
+        pelvis = rotation("y", theta)
 
-        def shin(dx: float, dy: float) -> tuple[float, float, Rotation]:
+        def shin(dx: float, dy: float) -> tuple[float, float, np.ndarray]:
             pitch = math.asin(dx / self.leg_length)
             roll = math.atan2(-dy, height)
-            return roll, pitch, _ROTATIONS["x"](roll) * _ROTATIONS["y"](pitch)
+            return roll, pitch, rotation("x", roll) @ rotation("y", pitch)
 
         roll, pitch, stance = shin(reach / 2, lateral)
         q[self._roll], q[self._pitch] = roll, pitch
-        for angle, role in zip((pelvis.inv() * stance).as_euler(self._sequence), self.bm.params.joints.hip_roles):
+        for angle, role in zip(euler(pelvis.T @ stance, self._sequence), self.bm.params.joints.hip_roles):
             q[self._stance[role]] = -angle  # the stance leg's coordinates are its joints' inverse rotations
         _, _, swing = shin(-reach / 2, -lateral)  # the other foot, from its own tip to its hip
-        for angle, role in zip((pelvis.inv() * swing).as_euler(self._sequence), self.bm.params.joints.hip_roles):
+        for angle, role in zip(euler(pelvis.T @ swing, self._sequence), self.bm.params.joints.hip_roles):
             q[self._swing[role]] = angle
 
     def theta_derivatives(self, step_length: float, arm_amplitude: float, mode: GaitMode, theta: float,
