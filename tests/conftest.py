@@ -26,6 +26,12 @@ def planner() -> GaitPlanner:
 
 
 @pytest.fixture(scope="session")
+def hips() -> GaitPlanner:
+    """The planner of the 13-DOF set (a yaw, a roll and a pitch joint in each hip)."""
+    return GaitPlanner("aoustin2013-hips")
+
+
+@pytest.fixture(scope="session")
 def default_gait(planner):
     return planner.plan(DEFAULT_REQUEST)
 

@@ -21,11 +21,6 @@ HIPS = "aoustin2013-hips"
 
 
 @pytest.fixture(scope="module")
-def hips() -> GaitPlanner:
-    return GaitPlanner(HIPS)
-
-
-@pytest.fixture(scope="module")
 def gait(hips):
     return hips.plan(GaitRequest(0.45, 0.45, math.radians(20.0), "normal"))
 

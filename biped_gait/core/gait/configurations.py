@@ -137,6 +137,26 @@ class BoundaryConfigurations:
         return (plus[0] - minus[0]) / (2 * h), (plus[1] - minus[1]) / (2 * h)
 
 
+def pitch_direction(bm: BipedModel, q: np.ndarray) -> np.ndarray:
+    """d q / d theta at the double-support configuration ``q`` (rad): the pelvis and trunk
+    pitching about the pelvis's own lateral axis, the legs and the arms as they are, each hip's
+    joints taking the rotation (their rates from the joints' axes, resolved in the pelvis frame).
+    The theta of ``TurningConfiguration`` moves its configuration so; at a sagittal configuration
+    it is ``BoundaryConfigurations.theta_direction``."""
+    joints = bm.params.joints
+    out = np.zeros(bm.nq)
+    for side, sign in (("stance", -1.0), ("swing", 1.0)):  # the stance leg's coordinates are inverse rotations
+        indices = [bm.index(role, side) for role in joints.hip_roles]
+        columns, frame = [], np.eye(3)
+        for k, role in zip(indices, joints.hip_roles):
+            axis = joints.role(role).axis
+            columns.append(frame[:, "xyz".index(axis)])
+            frame = frame @ rotation(axis, sign * q[k])
+        rates = np.linalg.lstsq(np.column_stack(columns), np.array([0.0, -1.0, 0.0]), rcond=None)[0]
+        out[indices] = sign * rates
+    return out
+
+
 @lru_cache(maxsize=32)
 def boundary_configurations(bm: BipedModel) -> BoundaryConfigurations:
     """The double-support configurations of ``bm`` (built once per model)."""

@@ -41,6 +41,7 @@ BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm s
 CLOSURE_ROUNDS = 10  # re-solves of the closure matched to the spin moments' share (2 to 4 suffice)
 CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride's continuation
 MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
+RADIUS_BISECTIONS = 4  # halvings of the curvature interval where a stride stops being admissible
 StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, qd_B(0), theta_2)
 
 
@@ -217,20 +218,30 @@ class GaitPlanner:
         (docs/model.md section 4.9). ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) of a nearby
         stride warm-starts it; without one the stride is reached from the straight gait at the
         same (L, T, alpha, mode) by continuation in the curvature 1 / R. ``ValueError`` for an
-        invalid request; a stride that cannot be reached is returned not converged, with the
-        smallest radius the continuation reached in its ``hint``."""
+        invalid request; a stride that is not admissible (or not reached) is returned so, with
+        the smallest radius of an admissible stride at that (L, T, alpha) in its ``hint``."""
         problem = validate_request(request, self.params)
         if not math.isfinite(problem.turn_radius):
             raise ValueError("a straight gait is one step: plan it with plan")
         start = time.perf_counter()
-        found, reached = "guess", problem.turn_radius
+        path: list[tuple[float, StrideGuess]] = []
+        found = "guess"
         if guess is None:
             straight = self.plan(replace(request, turn_radius=math.inf))
             if not straight.converged:
                 raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
-            found, (guess, reached) = "continuation", self._curvature_path(problem, straight)
+            found, path = "continuation", self._curvature_path(problem, straight)
+            guess = path[-1][1]
+        stride = self._stride(problem, guess, found)
+        if not stride.admissible:
+            stride = replace(stride, hint=self._radius_hint(problem, path))
+        return replace(stride, solve_time_s=time.perf_counter() - start)
+
+    def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
+        """The stride of ``problem`` solved from ``guess`` on the fine grid, its closures matched
+        to what the spin moments do (legs leaning), with its multipliers if ``stability``."""
         targets = (0.0, 0.0)
-        for _ in range(CLOSURE_ROUNDS):  # the closures matched to what the spin moments do (legs leaning)
+        for _ in range(CLOSURE_ROUNDS):
             solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                                     problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow, targets)
             a, b = solution.steps
@@ -241,25 +252,55 @@ class GaitPlanner:
             if max(abs(g.step.closure_gap - t) for g, t in zip(steps, targets)) <= self.settings.tolerance:
                 break
             guess = (a.qd_a, a.theta, b.qd_a, b.theta)
-        stability = None
-        if all(g.double_support is not None and g.double_support.impulses.success for g in steps):
+        multipliers = None
+        if stability and all(g.double_support is not None and g.double_support.impulses.success for g in steps):
             maps = [PoincareMap(self.hybrid, self.flow, problem.period, g.double_support.impulses.i_minus,
                                 g.double_support.impulses.i_plus) for g in steps]
             jacobians = [m.jacobian(np.concatenate([g.step.q0, g.step.qd_a])) for m, g in zip(maps, steps)]
-            stability = multipliers_of(jacobians[1] @ jacobians[0])
-        stride = Stride(problem.turn_radius, steps, stability, math.nan, found)
-        if not stride.admissible:
-            where = f"L = {problem.step_length:g} m, T = {problem.period:g} s, alpha = {math.degrees(problem.arm_amplitude):g} deg"
-            stride = replace(stride, hint=f"smallest turn radius reached from the straight gait at {where}: "
-                                          f"{abs(reached):.3g} m")
-        return replace(stride, solve_time_s=time.perf_counter() - start)
+            multipliers = multipliers_of(jacobians[1] @ jacobians[0])
+        return Stride(problem.turn_radius, steps, multipliers, math.nan, found)
 
-    def _curvature_path(self, problem: GaitProblem, straight: Gait) -> tuple[StrideGuess, float]:
+    def _radius_hint(self, problem: GaitProblem, path: list[tuple[float, StrideGuess]]) -> str:
+        """The smallest radius (m) of an admissible stride along the continuation ``path`` (its
+        curvatures, 1/m, and strides, from the straight gait towards the request's), by bisection
+        (``RADIUS_BISECTIONS`` halvings of the last interval), in words."""
+        where = (f"L = {problem.step_length:g} m, T = {problem.period:g} s, "
+                 f"alpha = {math.degrees(problem.arm_amplitude):g} deg")
+
+        def admissible(curvature: float, guess: StrideGuess) -> Stride | None:
+            stride = self._stride(replace(problem, turn_radius=1.0 / curvature), guess, "continuation", stability=False)
+            return stride if stride.admissible else None
+
+        low, high = 0, len(path)  # path[:low] admissible (the straight gait is), path[high:] not
+        while low < high:
+            middle = (low + high) // 2
+            if admissible(*path[middle]) is not None:
+                low = middle + 1
+            else:
+                high = middle
+        if low == 0:
+            return f"no admissible stride on a circle at {where} (the straight gait's neighbourhood included)"
+        good, guess = path[low - 1]
+        bad = path[low][0] if low < len(path) else 1.0 / problem.turn_radius
+        for _ in range(RADIUS_BISECTIONS):
+            middle = 0.5 * (good + bad)
+            stride = admissible(middle, guess)
+            if stride is not None:
+                a, b = stride.steps
+                good, guess = middle, (a.qd_a, a.theta, b.qd_a, b.theta)
+            else:
+                bad = middle
+        return f"smallest turn radius of an admissible stride at {where}: {abs(1.0 / good):.3g} m"
+
+    def _curvature_path(self, problem: GaitProblem, straight: Gait) -> list[tuple[float, StrideGuess]]:
         """From the straight gait to the stride of radius R: continuation in the curvature 1 / R,
         each step on the coarse grid warm-started from the last, halved where it fails or jumps
-        (``continuation.BRANCH_JUMP``); the last stride reached and its radius (m)."""
+        (``continuation.BRANCH_JUMP``); the curvatures (1/m) reached and their strides, the
+        last nearest the request's (the straight gait's first, at a vanishing curvature, if no
+        step succeeds)."""
         target = 1.0 / problem.turn_radius
         guess = (straight.qd_a, straight.theta, straight.qd_a, straight.theta)
+        path = [(MIN_CURVATURE_STEP * target / abs(target), guess)]
         coarse = replace(self.settings, tolerance=max(self.settings.tolerance, self.settings.coarse_tolerance),
                          max_iterations=STEP_ITERATIONS)
         flow = self.coarse_flow or self.flow
@@ -273,10 +314,11 @@ class GaitPlanner:
             a, b = solution.steps
             if solution.converged and max(np.max(np.abs(a.qd_a - guess[0])), np.max(np.abs(b.qd_a - guess[2]))) <= BRANCH_JUMP:
                 curvature, guess = trial, (a.qd_a, a.theta, b.qd_a, b.theta)
+                path.append((curvature, guess))
                 step = min(2.0 * step, CURVATURE_STEP / abs(target))
             else:
                 step *= 0.5
-        return guess, (1.0 / curvature if curvature else math.inf)
+        return path
 
     def _find(self, problem: GaitProblem) -> Gait:
         """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold."""

@@ -56,9 +56,10 @@ class TurningConfiguration:
         half = step_length / (2 * radius)  # half the heading change per step (rad), signed
         x = self._straighten(radius, half, np.array([0.0, math.sqrt(self.leg_length ** 2 - step_length ** 2 / 4)]))
         feet = self._legs(radius, half, *x)[2]
+        shift = math.copysign(x[1] * math.tan(lean), radius)  # towards the centre, by the upright height
         if lean:
-            x = self._straighten(radius, half, x, math.copysign(x[1] * math.tan(lean), radius), feet)
-        _, shins, _ = self._legs(radius, half, *x, math.copysign(x[1] * math.tan(lean), radius), feet)
+            x = self._straighten(radius, half, x, shift, feet)
+        _, shins, _ = self._legs(radius, half, *x, shift, feet)
         pelvis = _rot("z", half) @ _rot("x", x[0]) @ _rot("y", theta)  # in the stance foot's frame
         q = np.zeros(self.bm.nq)
         q[self.roll], q[self.pitch] = shins[0][0], shins[0][1]

@@ -80,11 +80,13 @@ def pelvis_pitch(bm: BipedModel, q: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class SteeringReference:
-    """The gait the re-aim steers to, linearized on its orbit: touchdown configuration q_T
+    """The gait step the re-aim steers to, linearized on its orbit: touchdown configuration q_T
     (rad), initial and final velocities (rad/s), duration (s), trunk pitch theta_p (rad),
     momentum about the foot-to-foot line at its touchdown M_p (kg m^2/s), the gains a (kg m^2/s
-    per rad) and b (-) of s, the chord Jacobian of the nq + 2 equations on the orbit, and e_theta
-    (nq), how the touchdown configuration moves with the pitch."""
+    per rad) and b (-) of s, the chord Jacobian of the nq + 2 equations on the orbit, e_theta
+    (nq), how the touchdown configuration moves with the pitch, and the touchdown the step starts
+    from on the orbit (a periodic gait's own; in a stride, the other step's): its configuration
+    (rad), pre-impact velocity (rad/s), pitch (rad) and momentum (kg m^2/s)."""
 
     q_t: np.ndarray
     qd_a: np.ndarray
@@ -96,10 +98,15 @@ class SteeringReference:
     b: float
     jacobian: np.ndarray
     direction: np.ndarray
+    start_q_t: np.ndarray
+    start_qd_b: np.ndarray
+    start_theta: float
+    start_momentum: float
 
     def error(self, bm: BipedModel, q_pre: np.ndarray, momentum: float) -> float:
-        """s (kg m^2/s) of a touchdown at ``q_pre`` with momentum ``momentum`` about the feet line."""
-        return self.a * (pelvis_pitch(bm, q_pre) - self.theta) + self.b * (momentum - self.momentum)
+        """s (kg m^2/s) of a touchdown at ``q_pre`` with momentum ``momentum`` about the feet line
+        that starts this step."""
+        return self.a * (pelvis_pitch(bm, q_pre) - self.start_theta) + self.b * (momentum - self.start_momentum)
 
 
 def momentum_row(hybrid: HybridStep, q: np.ndarray) -> np.ndarray:
@@ -114,25 +121,35 @@ def _theta_derivative(f, q: np.ndarray, direction: np.ndarray) -> np.ndarray:
 
 
 def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.ndarray, qd_a: np.ndarray,
-              qd_b: np.ndarray, period: float) -> SteeringReference:
+              qd_b: np.ndarray, period: float, direction: np.ndarray | None = None,
+              previous: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SteeringReference:
     """The linearization of the orbit from (``q0``, ``qd_a``) to (``q_t``, ``qd_b``) in
     ``period`` (s) on ``flow``'s grid: one integration with its sensitivity Phi to the initial
-    velocity and to the initial configuration along e_theta.
+    velocity and to the initial configuration along e_theta. ``direction``: e_theta at q_T (default
+    the straight gaits', ``BoundaryConfigurations.theta_direction``); ``previous``: the touchdown
+    configuration, velocity and e_theta of the step before, whose touchdown starts this one
+    (default this step's own: a periodic gait).
 
     a and b from the plain re-aim (unknowns dv, dtau; the start's pitch dtheta_s and momentum
-    dM_s given): Phi_qq e dtheta_s + Phi_qv dv + qd_b dtau = 0, (dg/dtheta_s qd_a) dtheta_s +
-    g dv - dM_s = 0, and dM' = r (Phi_vq e dtheta_s + Phi_vv dv + qdd_b dtau), with g the
-    closure's gain (d momentum after / d v) and r the momentum row at q_T."""
+    dM_s given): Phi_qq e_s dtheta_s + Phi_qv dv + qd_b dtau = 0, (dg/dtheta_s qd_a) dtheta_s +
+    g dv - dM_s = 0, and dM' = r (Phi_vq e_s dtheta_s + Phi_vv dv + qdd_b dtau), with g the
+    closure's gain (d momentum after / d v) at the starting touchdown, e_s its e_theta carried
+    through the leg exchange, and r the momentum row at q_T."""
     bm = hybrid.bm
     n = bm.nq
-    e_theta = boundary_configurations(bm).theta_direction
+    e_theta = boundary_configurations(bm).theta_direction if direction is None else np.asarray(direction)
+    if previous is None:
+        q_p, qd_p, e_p, e_start = q_t, qd_b, e_theta, e_theta
+    else:
+        q_p, qd_p, e_p = (np.asarray(x) for x in previous)
+        e_start = _theta_derivative(hybrid.exchange.configuration, q_p, e_p)
     seeds = np.zeros((2 * n, n + 1))
-    seeds[:n, 0], seeds[n:, 1:] = e_theta, np.eye(n)
+    seeds[:n, 0], seeds[n:, 1:] = e_start, np.eye(n)
     sens = flow.propagate(q0, qd_a, period, seeds).sens
-    phi_theta, phi = sens[:, 0], sens[:, 1:]  # d(q, qd)(T) / d theta_s along e_theta, and / d qd(0)
+    phi_theta, phi = sens[:, 0], sens[:, 1:]  # d(q, qd)(T) / d theta_s along e_s, and / d qd(0)
     qdd_b = flow.acceleration(q_t, qd_b)
-    gain = hybrid.impact(q_t).closure_gradients()[0]
-    gain_theta = _theta_derivative(lambda q: hybrid.impact(q).closure_gradients()[0], q_t, e_theta) @ qd_a
+    gain = hybrid.impact(q_p).closure_gradients()[0]
+    gain_theta = _theta_derivative(lambda q: hybrid.impact(q).closure_gradients()[0], q_p, e_p) @ qd_a
     row = momentum_row(hybrid, q_t)
     plain = np.zeros((n + 1, n + 1))
     plain[:n, :n], plain[:n, n], plain[n, :n] = phi[:n], qd_b, gain
@@ -148,7 +165,7 @@ def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.n
     jacobian[n + 1, :n], jacobian[n + 1, n] = b * row @ phi[n:], b * row @ qdd_b
     jacobian[n + 1, n + 1] = a + b * _theta_derivative(lambda q: momentum_row(hybrid, q), q_t, e_theta) @ qd_b
     return SteeringReference(q_t, qd_a, qd_b, period, pelvis_pitch(bm, q_t), float(row @ qd_b), float(a), float(b),
-                             jacobian, e_theta)
+                             jacobian, e_theta, q_p, qd_p, pelvis_pitch(bm, q_p), float(momentum_row(hybrid, q_p) @ qd_p))
 
 
 class MomentumSteering:
@@ -170,11 +187,13 @@ class MomentumSteering:
         self.transition = transition
         self.offset = np.zeros(hybrid.bm.nq + 2)
 
-    def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float) -> tuple[np.ndarray, float, float]:
+    def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float,
+              foot_line_moment: float = 0.0) -> tuple[np.ndarray, float, float]:
         """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
         touchdown pitch theta' (rad), from the touchdown at ``q_pre`` (rad) whose impact map is
         ``impact`` and pre-impact velocity ``xd_b`` (extended, rad/s); ``duration``: the warm
-        start of tau. ``SteeringFailed`` if no stage finds a step.
+        start of tau; ``foot_line_moment``: what the ground's spin moments change of the momentum
+        about the feet line (kg m^2/s, ``PlannedOrbit``). ``SteeringFailed`` if no stage finds a step.
 
         Stages, each tried when the ones before fail: chord steps on the walker's grid with the
         orbit's Jacobian (not for a transition's first step); Newton with the law from the orbit's
@@ -183,7 +202,7 @@ class MomentumSteering:
         its right-hand side, as far as it goes (a step that steers less this time, rather than
         none); last, the law along ``HOMOTOPY_STAGES`` touchdowns between the orbit's and this one.
         Newton runs on the coarse grid, finished by chord steps (else Newton) on the walker's."""
-        equations = _Equations(self, q_pre, impact, xd_b)
+        equations = _Equations(self, q_pre, impact, xd_b, foot_line_moment)
         x0 = np.concatenate([self.ref.qd_a, [duration, self.ref.theta]])
         x = None
         if self.transition is None:  # the chord steps reach only a state near the orbit
@@ -197,7 +216,7 @@ class MomentumSteering:
         if x is None:
             x = self._from_plain(equations, x0)
         if x is None:
-            x = self._from_orbit(q_pre, impact, xd_b, x0)
+            x = self._from_orbit(q_pre, impact, xd_b, x0, foot_line_moment)
         if x is None:
             raise SteeringFailed("re-aiming the next step failed (no solution found): the state is too far from the plan")
         n = self.hybrid.bm.nq
@@ -222,18 +241,20 @@ class MomentumSteering:
             x = stage.x
         return x
 
-    def _from_orbit(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, x0: np.ndarray) -> np.ndarray | None:
-        """The law along touchdowns from the orbit's (q_T, M_p) to (``q_pre``, its momentum) in
-        stages, each from the last; None if a stage fails."""
+    def _from_orbit(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, x0: np.ndarray,
+                    foot_line_moment: float) -> np.ndarray | None:
+        """The law along touchdowns from the orbit's (the step's starting touchdown and its
+        momentum) to (``q_pre``, its momentum) in stages, each from the last; None if a stage
+        fails."""
         ref, x = self.ref, x0
         momentum = float(impact.momentum_row @ xd_b)
         for fraction in np.linspace(0.0, 1.0, HOMOTOPY_STAGES + 1)[1:]:
-            q = ref.q_t + fraction * (q_pre - ref.q_t)
+            q = ref.start_q_t + fraction * (q_pre - ref.start_q_t)
             stage_impact = self.hybrid.impact(q)
             row = momentum_row(self.hybrid, q)
-            target = ref.momentum + fraction * (momentum - ref.momentum)
-            qd = ref.qd_b + (target - row @ ref.qd_b) * row / (row @ row)  # the stage's momentum about the feet line
-            stage = _Equations(self, q, stage_impact, self.hybrid.bm.embed(qd)).solve(x, free_pitch=True)
+            target = ref.start_momentum + fraction * (momentum - ref.start_momentum)
+            qd = ref.start_qd_b + (target - row @ ref.start_qd_b) * row / (row @ row)  # the stage's momentum about the feet line
+            stage = _Equations(self, q, stage_impact, self.hybrid.bm.embed(qd), foot_line_moment).solve(x, free_pitch=True)
             if not stage.converged:
                 return None
             x = stage.x
@@ -243,9 +264,11 @@ class MomentumSteering:
 class _Equations:
     """The steered re-aim's equations from one touchdown (``MomentumSteering.solve``)."""
 
-    def __init__(self, steering: MomentumSteering, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray) -> None:
+    def __init__(self, steering: MomentumSteering, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray,
+                 foot_line_moment: float) -> None:
         self.steering, self.ref = steering, steering.ref
         self.momentum = float(impact.momentum_row @ xd_b)
+        self.kept = self.momentum - foot_line_moment  # the momentum the next step starts with
         self.law = steering.rate * self.ref.error(steering.hybrid.bm, q_pre, self.momentum)
         self.gain = impact.closure_gradients()[0]
         self.q_start = steering.hybrid.exchange.configuration(q_pre)
@@ -264,7 +287,7 @@ class _Equations:
             seeds = np.vstack([np.zeros((q_n, q_n)), np.eye(q_n)]) if jacobian else None
             run = flow.propagate(self.q_start, v, tau, seeds)
         target = ref.q_t + (theta - ref.theta) * ref.direction
-        f = np.append(run.q - target, self.gain @ v - self.momentum)
+        f = np.append(run.q - target, self.gain @ v - self.kept)
         if free_pitch:
             row = momentum_row(hybrid, target)
             f = np.append(f, ref.a * (theta - ref.theta) + ref.b * (row @ run.qd - ref.momentum) - self.law)

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..dynamics import newton
-from ..gait.configurations import GaitMode
+from ..gait.configurations import GaitMode, pitch_direction
 from ..dynamics.flow import hermite_samples
 from ..dynamics.hybrid import HybridStep, ImpactMap
 from ..model.exchange import next_heading, other_side, world_axes
@@ -50,13 +50,17 @@ from ..dynamics.settings import DEFAULTS, Settings
 from .steering import MomentumSteering, SteeringFailed, reference
 from .world import WorldPictures, WorldState, WorldView
 
+CLOSURE_ROUNDS = 10  # re-aims per double support at most, with legs leaning (the planner's rounds)
+
 
 @dataclass(frozen=True)
 class PlannedOrbit:
     """What a walk needs of a plan: the parameter set (name or file), the gait's L (m), T (s),
     alpha (rad), mode, effort, the boundary configurations q0 and q_t (rad), the velocities
     qd_a at the start and qd_b at the end of the step (rad/s), the plan's verdict, and how its
-    impulses are chosen (friction cone, joint-rate bound, the effort's reading)."""
+    impulses are chosen (friction cone, joint-rate bound, the effort's reading), and what the
+    ground's spin moments change of the momentum about the feet line in the double support that
+    ends the step (kg m^2/s; zero but for legs leaning, docs/model.md section 5.2)."""
 
     params: str
     step_length: float
@@ -72,13 +76,16 @@ class PlannedOrbit:
     admissible: bool = True
     reasons: tuple[str, ...] = ()
     options: EffortOptions = EffortOptions()
+    foot_line_moment: float = 0.0
 
     @classmethod
     def of(cls, gait) -> "PlannedOrbit":
         """The orbit of a solved ``gait.Gait``."""
+        ds = gait.double_support
         return cls(gait.problem.params, gait.step_length, gait.period, gait.arm_amplitude, gait.mode,
                    gait.problem.effort, gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b,
-                   gait.converged, gait.admissible, gait.reasons, gait.problem.options)
+                   gait.converged, gait.admissible, gait.reasons, gait.problem.options,
+                   ds.foot_line_moment if ds is not None else 0.0)
 
 
 class Fall(Exception):
@@ -250,7 +257,8 @@ class Walker:
                                    np.asarray(orbit.qd_b))
             aim = None
             if self.momentum_rate is not None:
-                ref = reference(self.hybrid, self.step_flow, q0, q_t, qd_a, qd_b, orbit.period)
+                ref = reference(self.hybrid, self.step_flow, q0, q_t, qd_a, qd_b, orbit.period,
+                                *self._stride_pitches(cycle, k))
                 coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
                 aim = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse,
                                        transition if k == 0 else None)
@@ -260,6 +268,17 @@ class Walker:
                 aim = self.step_flow.propagate(q0, qd_a, orbit.period, seeds).sens[:n]
             out.append((orbit, aim))
         return out
+
+    def _stride_pitches(self, cycle: Cycle, k: int) -> tuple:
+        """What the steering reference of step ``k`` of ``cycle`` needs beyond a periodic gait's:
+        nothing for a straight gait; in a stride, e_theta at its touchdown and the step before's
+        touchdown (configuration, velocity, e_theta), which starts it."""
+        if len(cycle) == 1:
+            return ()
+        previous = cycle[k - 1]
+        q_p = np.asarray(previous.q_t)
+        return (pitch_direction(self.bm, np.asarray(cycle[k].q_t)),
+                (q_p, np.asarray(previous.qd_b), pitch_direction(self.bm, q_p)))
 
     def _aim_at(self, index: int) -> None:
         """Make step ``index`` of the cycle the plan the walk aims at (and compares with)."""
@@ -389,6 +408,7 @@ class Walker:
         """Impulses from the actual pre-impact state towards the plan, then the leg exchange."""
         bm, s = self.bm, self.state
         error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
+        foot_line_moment = self.orbit.foot_line_moment  # the plan's, of this double support
         if self._next_cycle is not None:
             offset = self.steering.offset if self.steering is not None else None
             self._cycle = self._prepared(self._next_cycle, offset)
@@ -399,17 +419,22 @@ class Walker:
         impact = self.hybrid.impact(q_td)
         planned = impact.problem(qd_td, self.qd_a)
         reachable, miss = planned.reachable()
-        if self.reaim:
-            qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b)
-            problem = replace(planned, xd_a=impact.next_step_velocity(qd_next))
-        else:
-            problem = reachable
-        xd_a = problem.xd_a
-        if not np.all(np.isfinite(xd_a)):
-            raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
-        sol = solve_impulses(problem, self.orbit.effort, self.orbit.options)
-        if not sol.success:
-            raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
+        for _ in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
+            if self.reaim:
+                qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b, foot_line_moment)
+                problem = replace(planned, xd_a=impact.next_step_velocity(qd_next))
+            else:
+                problem = reachable
+            xd_a = problem.xd_a
+            if not np.all(np.isfinite(xd_a)):
+                raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
+            sol = solve_impulses(problem, self.orbit.effort, self.orbit.options)
+            if not sol.success:
+                raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
+            done = sol.foot_line_moment(problem)
+            if not self.reaim or abs(done - foot_line_moment) <= self.settings.tolerance:
+                break
+            foot_line_moment = done
         # The new stance foot's world position, then the mirror: the next step in model coordinates.
         tip = bm.swing_tip(q_td)
         new_foot = s.stance_foot + s.axes @ tip
@@ -431,11 +456,12 @@ class Walker:
             next_stance_side=self.state.stance_side,
         )
 
-    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray) -> np.ndarray:
+    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, foot_line_moment: float) -> np.ndarray:
         """The next step's initial velocity (its own coordinates, rad/s), and its duration
         (``next_period``, s): the flow from ``q_start`` reaches the planned touchdown
         configuration q_T exactly, and the velocity is reachable through this double support
-        (the momentum about the feet line is kept).
+        (the momentum about the feet line is kept, up to the ``foot_line_moment`` (kg m^2/s) the
+        ground's spin moments change).
 
         Chord steps with the planned orbit's Jacobian: off the orbit by a numerical error
         only, they converge to rounding level in one or two steps. With momentum steering, the
@@ -444,12 +470,12 @@ class Walker:
         if self.steering is not None:
             try:
                 q_pre = self.hybrid.exchange.configuration(q_start)  # the exchange is an involution
-                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period)
+                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period, foot_line_moment)
             except SteeringFailed as exc:
                 raise Fall(str(exc)) from None
             return v
         gain, _ = impact.closure_gradients()  # d(momentum after)/d(qd_next)
-        target_momentum = float(impact.momentum_row @ xd_b)
+        target_momentum = float(impact.momentum_row @ xd_b) - foot_line_moment
         n = self.bm.nq
         jac = np.zeros((n + 1, n + 1))
         jac[:n, :n], jac[:n, n], jac[n, :n] = self._phi_qv, self.qd_b, gain
