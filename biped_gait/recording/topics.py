@@ -19,7 +19,8 @@ ROBOT_DESCRIPTION = "/robot_description"
 TF = "/tf"
 TF_STATIC = "/tf_static"
 GAIT_PHASE = "/gait_phase"
-CMD_VEL = "/cmd_vel"  # subscribed: the commanded walking speed
+CMD_VEL = "/cmd_vel"  # subscribed: the commanded walking speed and turn
+VELOCITY_ENVELOPE = "~/velocity_envelope"  # the simulator's: the commands it walks (latched)
 CLOCK = "/clock"
 
 GAIT_PLAN_TYPE = "biped_gait_interfaces/msg/GaitPlan"

@@ -138,4 +138,5 @@ def orbit_from_msg(msg: GaitPlan) -> PlannedOrbit:
         qd_a=np.array(msg.qd_a), qd_b=np.array(msg.qd_b), converged=msg.converged, admissible=msg.admissible,
         reasons=tuple(msg.reasons),
         options=EffortOptions(msg.friction, msg.rate_bound, msg.effort_coordinates or "joint"),
+        foot_line_moment=msg.foot_line_moment, theta=msg.theta, turn_radius=msg.turn_radius,
     )

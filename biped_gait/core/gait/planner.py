@@ -213,13 +213,14 @@ class GaitPlanner:
             gait = self._find(problem)
         return replace(gait, solve_time_s=time.perf_counter() - start)
 
-    def plan_stride(self, request: GaitRequest, guess: StrideGuess | None = None) -> Stride:
+    def plan_stride(self, request: GaitRequest, guess: StrideGuess | None = None, stability: bool = True) -> Stride:
         """Solve one gait on a circle (``request.turn_radius`` finite): a stride of two steps
         (docs/model.md section 4.9). ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) of a nearby
         stride warm-starts it; without one the stride is reached from the straight gait at the
         same (L, T, alpha, mode) by continuation in the curvature 1 / R. ``ValueError`` for an
         invalid request; a stride that is not admissible (or not reached) is returned so, with
-        the smallest radius of an admissible stride at that (L, T, alpha) in its ``hint``."""
+        the smallest radius of an admissible stride at that (L, T, alpha) in its ``hint``;
+        ``stability``: with the stride's open-loop multipliers (they cost about what the solve does)."""
         problem = validate_request(request, self.params)
         if not math.isfinite(problem.turn_radius):
             raise ValueError("a straight gait is one step: plan it with plan")
@@ -232,7 +233,7 @@ class GaitPlanner:
                 raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
             found, path = "continuation", self._curvature_path(problem, straight)
             guess = path[-1][1]
-        stride = self._stride(problem, guess, found)
+        stride = self._stride(problem, guess, found, stability)
         if not stride.admissible:
             stride = replace(stride, hint=self._radius_hint(problem, path))
         return replace(stride, solve_time_s=time.perf_counter() - start)

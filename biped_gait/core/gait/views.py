@@ -137,6 +137,7 @@ FIELDS: tuple[Field, ...] = (
     Field("bvp_iterations", lambda g: g.step.iterations),
     Field("end_point_residual", lambda g: g.step.end_residual),
     Field("closure_residual", _closure_residual, "closure_residual"),
+    Field("foot_line_moment", _ds("foot_line_moment", 0.0), "foot_line_moment"),
     Field("impact_equation_residual", _impulse("equation_residual", NAN)),
     Field("lp_duality_gap", _impulse("duality_gap", NAN)),
     Field("energy_drift", _figure("energy_drift")),

@@ -1,14 +1,18 @@
-"""Walking at a commanded speed: transition steps between gaits (docs/model.md section 8.8).
+"""Walking at a commanded speed and turn: transition steps between gaits (docs/model.md section 8.8).
 
-``SpeedFollower`` holds the commanded speed (m/s; clamped to the speed rule's admissible range)
-and, before each step of the walker, moves the gait the walker aims at one transition towards
-the gait of that speed: the speed of the aimed gait changes by at most ``max_change`` (m/s) per
-step (an acceleration bound), the rule (``speed``) gives the next gait's (L, T) at the walk's
-arm amplitude and mode, and its periodic orbit is solved by the shooting BVP (``bvp``, coarse
-Newton finished on the walker's grid) warm-started from the gait atlas's interpolation
-(``Atlas.guess``), else from the secant through the last two gaits solved (the gait aimed at
-so far, when there is one). A gait whose swing foot would come up to the touchdown from under
-the ground (``speed.walkable_nodes``) is refused.
+``SpeedFollower`` holds the commanded speed v (m/s; clamped to the speed rule's admissible
+range) and yaw rate omega (rad/s; as the curvature omega / v, clamped to ``max_curvature``,
+turning models only) and, before each step of the walker, moves the gait the walker aims at one
+transition towards the gait of that command: the speed of the aimed gait changes by at most
+``max_change`` (m/s) per step (an acceleration bound) and its curvature 1 / R by at most
+``max_curvature_change`` (1/m), the rule (``speed``) gives the next gait's (L, T) at the walk's
+arm amplitude and mode. A straight gait's periodic orbit is solved by the shooting BVP
+(``bvp``, coarse Newton finished on the walker's grid) warm-started from the gait atlas's
+interpolation (``Atlas.guess``), else from the secant through the last two gaits solved (the
+gait aimed at so far, when there is one); a gait on a circle is a stride of two steps
+(``GaitPlanner.plan_stride``) warm-started from the last stride (or the straight gait). A gait
+whose swing foot would come up to the touchdown from under the ground (``speed.walkable_nodes``)
+is refused.
 
 The walker (``Walker.retarget``) then makes the step a transition step: at its touchdown the
 impulses are re-solved from the actual pre-impact state towards the new gait, and the next step
@@ -28,21 +32,25 @@ import numpy as np
 
 from ..gait.atlas import Atlas, AtlasError, atlas_path
 from ..gait.bvp import solve_bvp
-from ..gait.planner import BRANCH_BOUND
+from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
 from .speed import FixedCadence, LeastEffort, SpeedRule, walkable_nodes
 from .steering import pelvis_pitch
-from .walk import PlannedOrbit, Walker
+from .walk import Cycle, PlannedOrbit, Walker, as_cycle
 from ..model.biped import BipedModel
 
 MAX_CHANGE = 0.05  # m/s per step: the default bound on the aimed gait's change of speed
+MAX_CURVATURE_CHANGE = 0.1  # 1/m per step: the default bound on the aimed gait's change of curvature
+MAX_CURVATURE = 0.5  # 1/m: the default bound on the curvature (R >= 2 m; admissible strides at the
+# default gait reach about 1 / 1.1 m, docs/results.md)
 SPEED_RULES = ("least_effort", "cadence")
 
 
 @dataclass(frozen=True)
 class Transition:
-    """One transition: before ``step``, towards ``speed`` (m/s, commanded ``commanded``), the
-    gait (L m, T s) and how long solving its orbit took (s), or why it failed (``failure``)."""
+    """One transition: before ``step``, towards ``speed`` (m/s, commanded ``commanded``) and the
+    curvature ``curvature`` (1/m), the gait (L m, T s) and how long solving its orbit took (s), or
+    why it failed (``failure``)."""
 
     step: int
     commanded: float
@@ -51,62 +59,132 @@ class Transition:
     period: float
     solve_seconds: float
     failure: str = ""
+    curvature: float = 0.0
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """The commands a follower walks: speeds ``low`` to ``high`` (m/s), curvatures |omega / v| up
+    to ``max_curvature`` (1/m; 0 for a model that walks straight), and the changes per step of
+    the aimed gait's speed (m/s) and curvature (1/m)."""
+
+    low: float
+    high: float
+    max_curvature: float
+    max_change: float
+    max_curvature_change: float
+
+    def describe(self) -> str:
+        """One line: the envelope in words."""
+        turn = (f", |angular.z| <= {self.max_curvature:g} * linear.x (turn radius >= {1 / self.max_curvature:.3g} m)"
+                if self.max_curvature > 0 else ", no turning (angular.z ignored)")
+        return f"linear.x in [{self.low:.3f}, {self.high:.3f}] m/s{turn}"
 
 
 class SpeedFollower:
-    """Follows a commanded speed with the walker's gaits (of the model ``bm``); ``rule`` picks
-    them, ``atlas`` (or None) warm-starts their orbits, ``settings`` are the BVP's (grids,
-    tolerance)."""
+    """Follows a commanded speed and turn with the walker's gaits (of the model ``bm``); ``rule``
+    picks them, ``atlas`` (or None) warm-starts their orbits, ``settings`` are the BVP's (grids,
+    tolerance); ``turning`` (None: the model walks straight) solves the strides of a turn, up
+    to curvature ``max_curvature`` (1/m)."""
 
-    def __init__(self, bm: BipedModel, rule: SpeedRule, orbit: PlannedOrbit, settings: Settings,
-                 atlas: Atlas | None = None, max_change: float = MAX_CHANGE) -> None:
+    def __init__(self, bm: BipedModel, rule: SpeedRule, orbit: PlannedOrbit | Cycle, settings: Settings,
+                 atlas: Atlas | None = None, max_change: float = MAX_CHANGE, turning: GaitPlanner | None = None,
+                 max_curvature: float = MAX_CURVATURE, max_curvature_change: float = MAX_CURVATURE_CHANGE) -> None:
         if not max_change > 0:
             raise ValueError(f"the change of speed per step must be positive, got {max_change}")
+        if not max_curvature_change > 0:
+            raise ValueError(f"the change of curvature per step must be positive, got {max_curvature_change}")
         self.bm, self.rule, self.settings, self.atlas, self.max_change = bm, rule, settings, atlas, max_change
-        self.orbit = orbit
-        self.speed = orbit.step_length / orbit.period  # of the gait aimed at (m/s)
-        # (L m, T s) and warm start (qd(0), theta) of the last two gaits aimed at, oldest first
-        self._solved = [((orbit.step_length, orbit.period), (orbit.qd_a, pelvis_pitch(bm, orbit.q_t)))]
-        self._commanded = self.speed
+        self.turning = turning
+        self.max_curvature = max_curvature if turning is not None else 0.0
+        self.max_curvature_change = max_curvature_change
+        cycle = as_cycle(orbit)
+        self.orbit = cycle[0]
+        self.speed = self.orbit.step_length / self.orbit.period  # of the gait aimed at (m/s)
+        self.curvature = 0.0 if math.isinf(self.orbit.turn_radius) else 1.0 / self.orbit.turn_radius  # 1/m
+        # (L m, T s) and warm start (qd(0), theta) of the last two straight gaits aimed at, oldest first
+        self._solved = [((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(bm, self.orbit.q_t)))]
+        self._stride: StrideGuess | None = (
+            (cycle[0].qd_a, cycle[0].theta, cycle[1].qd_a, cycle[1].theta) if len(cycle) == 2 else None)
+        self._commanded = (self.speed, self.curvature)
         self._lock = threading.Lock()
         self.transitions: list[Transition] = []
+
+    @property
+    def envelope(self) -> Envelope:
+        """The commands this follower walks."""
+        return Envelope(self.rule.low, self.rule.high, self.max_curvature, self.max_change, self.max_curvature_change)
 
     @property
     def commanded(self) -> float:
         """The commanded speed (m/s), clamped."""
         with self._lock:
-            return self._commanded
+            return self._commanded[0]
 
-    def command(self, speed: float) -> tuple[float, bool]:
-        """Command ``speed`` (m/s); returns the speed that will be walked (clamped to the rule's
-        admissible range) and whether it was clamped. ``ValueError`` if it is not finite."""
-        if not math.isfinite(speed):
-            raise ValueError(f"a commanded speed must be finite, got {speed}")
+    def command(self, speed: float, yaw_rate: float = 0.0) -> tuple[float, float, bool]:
+        """Command ``speed`` (m/s) and ``yaw_rate`` (rad/s, positive turns left); returns the speed
+        and the yaw rate that will be walked (the speed clamped to the rule's admissible range,
+        the curvature yaw_rate / speed to ``max_curvature``: none for a model that walks
+        straight) and whether either was clamped. ``ValueError`` if one is not finite."""
+        if not (math.isfinite(speed) and math.isfinite(yaw_rate)):
+            raise ValueError(f"a commanded speed and yaw rate must be finite, got {speed}, {yaw_rate}")
         clamped, moved = self.rule.clamp(speed)
+        curvature = float(np.clip(yaw_rate / clamped, -self.max_curvature, self.max_curvature))
+        turned = abs(curvature * clamped - yaw_rate) > 1e-12
         with self._lock:
-            self._commanded = clamped
-        return clamped, moved
+            self._commanded = (clamped, curvature)
+        return clamped, curvature * clamped, moved or turned
 
     def before_step(self, walker: Walker) -> Transition | None:
-        """Aim ``walker``'s next step one transition closer to the commanded speed (None if it is
-        at that speed already). A gait whose orbit cannot be solved is not aimed at: the
+        """Aim ``walker``'s next step one transition closer to the commanded speed and turn (None
+        if it is at them already). A gait whose orbit cannot be solved is not aimed at: the
         transition is returned with its ``failure``, and the next step tries again."""
-        commanded = self.commanded
-        if abs(commanded - self.speed) < 1e-9:
+        with self._lock:
+            commanded, aimed = self._commanded
+        if abs(commanded - self.speed) < 1e-9 and abs(aimed - self.curvature) < 1e-12:
             return None
         speed = self.speed + float(np.clip(commanded - self.speed, -self.max_change, self.max_change))
+        curvature = self.curvature + float(np.clip(aimed - self.curvature, -self.max_curvature_change,
+                                                   self.max_curvature_change))
         gait = self.rule.gait(speed)
         start = time.perf_counter()
-        orbit, failure = self._orbit(walker, gait.step_length, gait.period)
+        if abs(curvature) < 1e-12:
+            curvature = 0.0
+            orbit, failure = self._orbit(walker, gait.step_length, gait.period)
+        else:
+            orbit, failure = self._stride_cycle(gait.step_length, gait.period, curvature)
         transition = Transition(walker.state.step, commanded, speed, gait.step_length, gait.period,
-                                time.perf_counter() - start, failure)
+                                time.perf_counter() - start, failure, curvature)
         self.transitions.append(transition)
         if orbit is not None:
             walker.retarget(orbit)
-            self.orbit, self.speed = orbit, speed
-            self._solved = [*self._solved[-1:],
-                            ((orbit.step_length, orbit.period), (orbit.qd_a, pelvis_pitch(self.bm, orbit.q_t)))]
+            self.orbit, self.speed, self.curvature = as_cycle(orbit)[0], speed, curvature
+            if curvature == 0.0:
+                self._solved = [*self._solved[-1:],
+                                ((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(self.bm, self.orbit.q_t)))]
         return transition
+
+    def _stride_cycle(self, step_length: float, period: float, curvature: float) -> tuple[Cycle | None, str]:
+        """The stride (L m, T s) on the circle of curvature ``curvature`` (1/m) at the walk's alpha
+        and mode, warm-started from the last stride (or the last straight gait); (None, why) if
+        it is not reached or not admissible."""
+        current = self.orbit
+        if self._stride is not None:
+            guess = self._stride
+        else:
+            qd, theta = self._secant((step_length, period))
+            guess = (qd, theta, qd, theta)
+        request = GaitRequest(step_length, period, current.arm_amplitude, current.mode, turn_radius=1.0 / curvature)
+        stride = self.turning.plan_stride(request, guess, stability=False)
+        where = f"the stride L = {step_length:.3f} m, T = {period:.3f} s, R = {1.0 / curvature:.3g} m"
+        if not stride.converged:
+            return None, f"{where}: not reached from the last gait"
+        if not stride.admissible:
+            return None, f"{where}: not admissible ({'; '.join(stride.reasons)})"
+        a, b = stride.steps
+        self._stride = (a.qd_a, a.theta, b.qd_a, b.theta)
+        return tuple(replace(PlannedOrbit.of(step), params=current.params, effort=current.effort,
+                             options=current.options) for step in stride.steps), ""
 
     def _secant(self, point: tuple[float, float]) -> tuple[np.ndarray, float]:
         """The warm start at (L m, T s): the last gait's, moved along the secant through the last
@@ -146,15 +224,18 @@ class SpeedFollower:
 
 
 def follower_for(walker: Walker, settings: Settings, rule: str = SPEED_RULES[0], max_change: float = MAX_CHANGE,
-                 source: str | None = None) -> tuple[SpeedFollower, str]:
-    """A follower of speed commands for ``walker``'s gait (its parameters, alpha and mode), and a
-    note ('' if none): ``rule`` ``least_effort`` needs the current gait atlas of the walker's
-    parameters (``source``: the name or file the user gave them by), and falls back to
-    ``cadence`` (the walker's period) with a note saying why; ``cadence`` uses the atlas's
-    walkable step lengths when there is one."""
+                 source: str | None = None, max_curvature: float = MAX_CURVATURE,
+                 max_curvature_change: float = MAX_CURVATURE_CHANGE) -> tuple[SpeedFollower, str]:
+    """A follower of speed and turn commands for ``walker``'s gait (its parameters, alpha and
+    mode), and a note ('' if none): ``rule`` ``least_effort`` needs the current gait atlas of
+    the walker's parameters (``source``: the name or file the user gave them by), and falls back
+    to ``cadence`` (the walker's period) with a note saying why; ``cadence`` uses the atlas's
+    walkable step lengths when there is one. Turns (up to ``max_curvature``, 1/m) with a model
+    of lateral hip joints only."""
     if rule not in SPEED_RULES:
         raise ValueError(f"unknown speed rule {rule!r}: use {' or '.join(SPEED_RULES)}")
     orbit, params = walker.orbit, walker.bm.params
+    cycle = walker.cycle
     notes = []
     try:
         atlas = Atlas.load(atlas_path(params, orbit.mode), params, source)
@@ -162,10 +243,13 @@ def follower_for(walker: Walker, settings: Settings, rule: str = SPEED_RULES[0],
         atlas = None
         notes.append(str(exc))
     walkable = walkable_nodes(atlas, orbit.arm_amplitude, walker.hybrid, walker.grid) if atlas is not None else None
+    turning = (GaitPlanner(params, replace(settings, fine_steps=walker.grid), on_note=lambda _: None)
+               if params.joints.lateral_hips else None)
+    extra = dict(turning=turning, max_curvature=max_curvature, max_curvature_change=max_curvature_change)
     if rule == "least_effort" and atlas is not None:
         try:
-            return SpeedFollower(walker.bm, LeastEffort(atlas, orbit.arm_amplitude, walkable), orbit, settings, atlas,
-                                 max_change), ""
+            return SpeedFollower(walker.bm, LeastEffort(atlas, orbit.arm_amplitude, walkable), cycle, settings, atlas,
+                                 max_change, **extra), ""
         except ValueError as exc:
             notes.append(str(exc))
     try:
@@ -175,4 +259,4 @@ def follower_for(walker: Walker, settings: Settings, rule: str = SPEED_RULES[0],
         notes.append(str(exc))
     if rule == "least_effort":
         notes.append(f"walking at a fixed cadence (T = {orbit.period:g} s) instead of the least effort per metre")
-    return SpeedFollower(walker.bm, cadence, orbit, settings, atlas, max_change), "; ".join(notes)
+    return SpeedFollower(walker.bm, cadence, cycle, settings, atlas, max_change, **extra), "; ".join(notes)

@@ -32,6 +32,7 @@ which physical foot that is, and ``stance_foot`` where it is in the world (m). U
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 
@@ -58,9 +59,11 @@ class PlannedOrbit:
     """What a walk needs of a plan: the parameter set (name or file), the gait's L (m), T (s),
     alpha (rad), mode, effort, the boundary configurations q0 and q_t (rad), the velocities
     qd_a at the start and qd_b at the end of the step (rad/s), the plan's verdict, and how its
-    impulses are chosen (friction cone, joint-rate bound, the effort's reading), and what the
+    impulses are chosen (friction cone, joint-rate bound, the effort's reading), what the
     ground's spin moments change of the momentum about the feet line in the double support that
-    ends the step (kg m^2/s; zero but for legs leaning, docs/model.md section 5.2)."""
+    ends the step (kg m^2/s; zero but for legs leaning, docs/model.md section 5.2), the trunk
+    pitch theta of its touchdown configuration (rad) and the radius of the circle it is a step
+    of (m, signed; inf: straight)."""
 
     params: str
     step_length: float
@@ -77,6 +80,8 @@ class PlannedOrbit:
     reasons: tuple[str, ...] = ()
     options: EffortOptions = EffortOptions()
     foot_line_moment: float = 0.0
+    theta: float = math.nan
+    turn_radius: float = math.inf
 
     @classmethod
     def of(cls, gait) -> "PlannedOrbit":
@@ -85,7 +90,7 @@ class PlannedOrbit:
         return cls(gait.problem.params, gait.step_length, gait.period, gait.arm_amplitude, gait.mode,
                    gait.problem.effort, gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b,
                    gait.converged, gait.admissible, gait.reasons, gait.problem.options,
-                   ds.foot_line_moment if ds is not None else 0.0)
+                   ds.foot_line_moment if ds is not None else 0.0, gait.theta, gait.problem.turn_radius)
 
 
 class Fall(Exception):
@@ -269,6 +274,11 @@ class Walker:
             out.append((orbit, aim))
         return out
 
+    @property
+    def cycle(self) -> Cycle:
+        """The steps of the gait walked (one, or a stride's two)."""
+        return tuple(orbit for orbit, _ in self._cycle)
+
     def _stride_pitches(self, cycle: Cycle, k: int) -> tuple:
         """What the steering reference of step ``k`` of ``cycle`` needs beyond a periodic gait's:
         nothing for a straight gait; in a stride, e_theta at its touchdown and the step before's
@@ -294,9 +304,10 @@ class Walker:
             self._phi_qv = aim
 
     def retarget(self, orbit: PlannedOrbit | Cycle) -> None:
-        """Aim the next step at ``orbit`` (another gait, or the steps of a stride): from the current
-        step's touchdown on, the re-aim steers to it and touchdowns are compared with it (a
-        transition step, docs/model.md section 8.8)."""
+        """Aim the next step at ``orbit`` (another gait, or the steps of a stride: its step on the
+        next stance foot, A on the right, B on the left): from the current step's touchdown on, the
+        re-aim steers to it and touchdowns are compared with it (a transition step, docs/model.md
+        section 8.8)."""
         cycle = as_cycle(orbit)
         if not all(o.converged for o in cycle):
             raise ValueError("cannot walk a plan that did not converge")
@@ -413,7 +424,7 @@ class Walker:
             offset = self.steering.offset if self.steering is not None else None
             self._cycle = self._prepared(self._next_cycle, offset)
             self._next_cycle = None
-            self._aim_at(0)
+            self._aim_at(0 if len(self._cycle) == 1 or other_side(s.stance_side) == "right" else 1)
         elif len(self._cycle) > 1:  # a stride: the next step is the cycle's next
             self._aim_at((self._index + 1) % len(self._cycle))
         impact = self.hybrid.impact(q_td)
