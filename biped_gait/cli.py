@@ -4,7 +4,7 @@ gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effor
 ``figure`` (the paper's Fig. 4 and Fig. 5) and ``results-page`` (docs/results.md); ``atlas``
 (build, show, check the gait atlases the planner starts from, ``atlas_cli``); ``push-study``
 (the largest push on the trunk the walker recovers from, per direction and arm amplitude);
-``mjcf``, ``check-mujoco`` and ``finite-support`` (the second engine, ``mujoco_cli``).
+``mjcf`` and ``check-mujoco`` (the second engine, ``mujoco_cli``).
 Degrees at this edge; SI and radians inside.
 
 Errors in the input print one line on stderr and exit with status 2, output paths included

@@ -1,6 +1,5 @@
-"""The ``biped-gait`` verbs of the second engine: ``mjcf`` (the MJCF export), ``check-mujoco`` (the
-plan checked by MuJoCo) and ``finite-support`` (the planned double support of duration d, walked
-by both engines: the results page's section, standalone). MuJoCo is imported by the verbs that
+"""The ``biped-gait`` verbs of the second engine: ``mjcf`` (the MJCF export) and ``check-mujoco``
+(the plan checked by MuJoCo). MuJoCo is imported by the verbs that
 use it, not by the command's start. Errors in the input are ``ValueError`` (one line, exit
 status 2 from ``cli.main``)."""
 
@@ -12,11 +11,10 @@ import math
 import sys
 from pathlib import Path
 
-from .arguments import check_output_file, check_output_folder
+from .arguments import check_output_file
 from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
 
 CHECK_TOLERANCE = 1e-8  # rad: the ballistic step's agreement that check-mujoco asks for
-D_VALUES_MS = (1.0, 2.0, 5.0, 10.0, 20.0)
 
 
 def _gait_arguments(parser: argparse.ArgumentParser) -> None:
@@ -44,14 +42,6 @@ def add_parsers(sub) -> None:
     _gait_arguments(check)
     check.add_argument("--timestep", type=float, default=1e-4, help="MuJoCo's RK4 step (s), default 1e-4")
     check.add_argument("--json", type=Path, help="write the figures to this JSON file")
-    finite = sub.add_parser("finite-support", help="the double support of duration d planned (effort, friction, "
-                            "torques) and walked 20 steps by both engines, for each d: the results page's section")
-    _gait_arguments(finite)
-    finite.add_argument("--durations", nargs="+", type=float, default=list(D_VALUES_MS), metavar="MS",
-                        help=f"durations d of the double support (ms), default {' '.join(f'{d:g}' for d in D_VALUES_MS)}")
-    finite.add_argument("--steps", type=int, default=20, help="steps walked per engine and d, default 20")
-    finite.add_argument("--out", type=Path, default=Path("finite-support"),
-                        help="folder of the section (finite-support.md) and its figure, default finite-support")
 
 
 def _write(text: str, output: Path | None) -> None:
@@ -108,20 +98,4 @@ def run_check(args: argparse.Namespace) -> int:
     return 0 if agrees else 1
 
 
-def run_finite(args: argparse.Namespace) -> int:
-    if not all(math.isfinite(d) and d > 0 for d in args.durations):
-        raise ValueError("--durations must be positive numbers of milliseconds")
-    if args.steps < 1:
-        raise ValueError(f"--steps must be at least 1, got {args.steps}")
-    check_output_folder(args.out, "--out", force=True)
-    request = _request(args)
-    from .studies.finite_support_page import finite_support_section, write_section
-
-    section = finite_support_section(args.params, request, tuple(d / 1000 for d in args.durations), args.steps, args.out)
-    path = write_section(section, args.out)
-    print("\n".join(section.lines))
-    print(f"section written to {path}")
-    return 0
-
-
-COMMANDS = {"mjcf": run_mjcf, "check-mujoco": run_check, "finite-support": run_finite}
+COMMANDS = {"mjcf": run_mjcf, "check-mujoco": run_check}
