@@ -3,7 +3,8 @@
 gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effort),
 ``figure`` (the paper's Fig. 4 and Fig. 5) and ``results-page`` (docs/results.md); ``atlas``
 (build, show, check the gait atlases the planner starts from, ``atlas_cli``); ``push-study``
-(the largest push on the trunk the walker recovers from, per direction and arm amplitude).
+(the largest push on the trunk the walker recovers from, per direction and arm amplitude);
+``mjcf`` and ``check-mujoco`` (the second engine, ``mujoco_cli``).
 Degrees at this edge; SI and radians inside.
 
 Errors in the input print one line on stderr and exit with status 2, output paths included
@@ -22,7 +23,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from . import atlas_cli
+from . import atlas_cli, mujoco_cli
 from .arguments import OneLineParser, check_output_file, check_output_folder
 from .core.gait import views
 from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
@@ -188,6 +189,7 @@ def _parser() -> argparse.ArgumentParser:
     recover_parser.add_argument("--out", type=Path, help="output .mcap (default: <name>_recovered/<name>_recovered_0.mcap)")
     _study_parsers(sub)
     atlas_cli.add_parser(sub, _add_executor)
+    mujoco_cli.add_parsers(sub)
     return parser
 
 
@@ -322,7 +324,7 @@ def _recover(args: argparse.Namespace) -> int:
 
 STUDY_COMMANDS = {"sweep": _sweep, "optimize-arms": _optimize_arms, "figure": _figure, "results-page": _results_page,
                   "atlas": atlas_cli.run, "maps": _maps, "push-study": _push_study,
-                  "recover": _recover}
+                  "recover": _recover, **mujoco_cli.COMMANDS}
 
 
 def main(argv: list[str] | None = None) -> int:

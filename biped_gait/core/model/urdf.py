@@ -7,13 +7,19 @@ are the table's (``JointTable.physical_joints``): each leg's hip joints and knee
 ``right_hip_roll``, ``right_hip_pitch`` with hip joints), ``torso_yaw``, the shoulders. Angles
 follow the URDF convention (child relative to parent, right-hand rule about the joint's axis),
 so a positive hip pitch swings that foot backward, a positive knee angle flexes the knee, a
-positive shoulder angle swings that hand backward. Limits are the table's.
+positive shoulder angle swings that hand backward. Limits (range, speed, effort) are the table's.
+
+MuJoCo and Pinocchio both load it: the links the model leaves without mass (the pelvis, the links
+between a hip's joints) and the rods without axial inertia get the epsilon values of
+``exported`` (stated in a comment of the file); each limb has a collision capsule and each foot tip
+a collision sphere, the point foot.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .exported import EPSILON_INERTIA, EPSILON_MASS, FOOT_CLEARANCE, FOOT_RADIUS, LIMB_RADIUS, padded, padded_inertia
 from .joints import Coordinate, JointSpec, JointTable
 from .params import BipedParams, Link
 
@@ -65,21 +71,42 @@ def _vec(v) -> str:
     return " ".join(f"{x:.6g}" for x in v)
 
 
-def _link(name: str, link: Link | None, com_z: float, color: str, visual_z: float, length: float) -> str:
+def _inertial(mass: float, com_z: float, inertia: tuple[float, float, float]) -> str:
+    ixx, iyy, izz = inertia
+    return (f'    <inertial><origin xyz="0 0 {com_z:.12g}"/><mass value="{mass:.12g}"/>'
+            f'<inertia ixx="{ixx:.12g}" ixy="0" ixz="0" iyy="{iyy:.12g}" iyz="0" izz="{izz:.12g}"/></inertial>')
+
+
+def _link(name: str, link: Link | None, com_z: float, color: str, visual_z: float, length: float,
+          moving: bool = False, collision: tuple[float, float] = (0.0, 0.0)) -> str:
+    """A link: ``link``'s inertia (its axial zero padded), or none for a fixed massless frame (a
+    hand, a foot), or the epsilon mass of a massless ``moving`` link; a cylinder of ``length``
+    centred at ``visual_z``, and a collision capsule ``collision`` (its centre's height in the link
+    frame and its length, m; length 0: none)."""
     parts = [f'  <link name="{name}">']
     if link is not None:
-        ixx, iyy, izz = link.inertia
-        parts.append(
-            f'    <inertial><origin xyz="0 0 {com_z:.6g}"/><mass value="{link.mass:.6g}"/>'
-            f'<inertia ixx="{ixx:.6g}" ixy="0" ixz="0" iyy="{iyy:.6g}" iyz="0" izz="{izz:.6g}"/></inertial>'
-        )
+        parts.append(_inertial(link.mass, com_z, padded_inertia(link)))
+    elif moving:
+        parts.append(_inertial(EPSILON_MASS, 0.0, (EPSILON_INERTIA,) * 3))
     if length > 0:
         parts.append(
-            f'    <visual><origin xyz="0 0 {visual_z:.6g}"/><geometry><cylinder radius="0.035" length="{length:.6g}"/>'
+            f'    <visual><origin xyz="0 0 {visual_z:.6g}"/><geometry><cylinder radius="{LIMB_RADIUS:g}" length="{length:.6g}"/>'
             f'</geometry><material name="{color}"/></visual>'
         )
+    centre, height = collision
+    if height > 0:  # URDF has no capsule: a cylinder and a sphere at each end
+        parts.append(f'    <collision><origin xyz="0 0 {centre:.6g}"/><geometry><cylinder radius="{LIMB_RADIUS:g}" '
+                     f'length="{height:.6g}"/></geometry></collision>')
+        parts += [f'    <collision><origin xyz="0 0 {centre + end * height / 2:.6g}"/><geometry><sphere '
+                  f'radius="{LIMB_RADIUS:g}"/></geometry></collision>' for end in (-1, 1)]
     parts.append("  </link>")
     return "\n".join(parts)
+
+
+def _foot(name: str) -> str:
+    """A foot tip: the point foot's collision sphere, no mass (fixed to its shin)."""
+    return (f'  <link name="{name}">\n    <collision><geometry><sphere radius="{FOOT_RADIUS:g}"/></geometry></collision>'
+            "\n  </link>")
 
 
 def _joint(name: str, spec: JointSpec | None, parent: str, child: str, xyz) -> str:
@@ -99,38 +126,46 @@ def make_urdf(p: BipedParams) -> str:
     table = p.joints
     torso = table.role("torso_yaw")
     shoulder = table.role("shoulder")
+    between = [spec.child.replace("{side}", side) for side in ("right", "left") for spec in table.joints
+               if spec.role in table.hip_roles and spec.child != "thigh"]
+    rods = [name for name in ("shin", "thigh", "trunk", "arm") if min(getattr(p, name).inertia) <= 0]
     out = [
         '<?xml version="1.0"?>',
         f'<robot name="biped_gait_{p.name.replace("-", "_")}">',
+        f"  <!-- {padded(['base_link', *between], rods)}. Collision capsules as a cylinder and two spheres. -->",
+        '  <mujoco><compiler inertiafromgeom="false" discardvisual="true"/></mujoco>',
         '  <material name="trunk"><color rgba="0.25 0.45 0.75 1"/></material>',
         '  <material name="right"><color rgba="0.85 0.3 0.25 1"/></material>',
         '  <material name="left"><color rgba="0.3 0.7 0.35 1"/></material>',
         '  <link name="base_link">\n    <visual><geometry><box size="0.06 %.6g 0.06"/></geometry>'
-        '<material name="trunk"/></visual>\n  </link>' % (2 * p.hip_half_width),
-        _link("torso", tr, tr.com_offset - p.torso_joint_height, "trunk", tr.length / 2, tr.length),
+        '<material name="trunk"/></visual>\n%s\n  </link>' % (2 * p.hip_half_width,
+                                                              _inertial(EPSILON_MASS, 0.0, (EPSILON_INERTIA,) * 3)),
+        _link("torso", tr, tr.com_offset - p.torso_joint_height, "trunk", tr.length / 2, tr.length,
+              collision=(tr.length / 2, tr.length)),
         _joint(torso.name, torso, "base_link", "torso", (0, 0, p.torso_joint_height)),
     ]
     for side, sign in (("right", -1.0), ("left", 1.0)):
         out += [
-            _link(f"{side}_arm", a, -a.com_offset, side, -a.length / 2, a.length),
+            _link(f"{side}_arm", a, -a.com_offset, side, -a.length / 2, a.length, collision=(-a.length / 2, a.length)),
             _joint(shoulder.named(side), shoulder, "torso", f"{side}_arm", (0, sign * p.shoulder_half_width, p.shoulder_height)),
             _link(f"{side}_hand", None, 0, side, 0, 0),
             _joint(f"{side}_hand_fixed", None, f"{side}_arm", f"{side}_hand", (0, 0, -a.length)),
         ]
-        out.append(_link(f"{side}_thigh", t, -t.com_offset, side, -t.length / 2, t.length))
+        out.append(_link(f"{side}_thigh", t, -t.com_offset, side, -t.length / 2, t.length, collision=(-t.length / 2, t.length)))
         parent, xyz = "base_link", (0, sign * p.hip_half_width, 0)
         for role in table.hip_roles:  # from the pelvis; the joints between them carry massless links
             spec = table.role(role)
             child = f"{side}_thigh" if spec.child == "thigh" else spec.child.replace("{side}", side)
             if spec.child != "thigh":
-                out.append(_link(child, None, 0, side, 0, 0))
+                out.append(_link(child, None, 0, side, 0, 0, moving=True))
             out.append(_joint(spec.named(side), spec, parent, child, xyz))
             parent, xyz = child, (0, 0, 0)
         knee = table.role("knee")
         out += [
-            _link(f"{side}_shin", s, -s.com_offset, side, -s.length / 2, s.length),
+            _link(f"{side}_shin", s, -s.com_offset, side, -s.length / 2, s.length,
+                  collision=(-(s.length - FOOT_CLEARANCE - LIMB_RADIUS) / 2, s.length - FOOT_CLEARANCE - LIMB_RADIUS)),
             _joint(knee.named(side), knee, f"{side}_thigh", f"{side}_shin", (0, 0, -t.length)),
-            _link(f"{side}_foot", None, 0, side, 0, 0),
+            _foot(f"{side}_foot"),
             _joint(f"{side}_foot_fixed", None, f"{side}_shin", f"{side}_foot", (0, 0, -s.length)),
         ]
     out.append("</robot>")
