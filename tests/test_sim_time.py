@@ -111,7 +111,7 @@ def test_clock_tf_and_the_recording_as_users_expect(planner_node, side, tmp_path
     with AnyReader([bag]) as reader:
         qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
     assert set(qos) == {"/joint_states", "/odom", "/angular_momentum", "/tf", "/tf_static", "/robot_description",
-                        "/gait_events", "/gait_phase"}
+                        "/gait_events", "/gait_phase", "/biped_gait_simulator/velocity_envelope"}
     assert all(len(profiles) == 1 for profiles in qos.values())
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     hashes = {t["topic_metadata"]["name"]: t["topic_metadata"]["type_description_hash"]
@@ -179,7 +179,7 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
     joints = [deserialize_message(data, JointState) for data in received["/joint_states"]]
     assert len(joints) >= 10 and list(joints[0].name)[:2] == ["right_hip", "right_knee"]
     odom = received.get("/odom")
-    assert odom is None or deserialize_message(odom[0], Odometry).header.frame_id == "world"
+    assert odom is None or deserialize_message(odom[0], Odometry).header.frame_id == "odom"
 
 
 async def foxglove_client(port: int) -> tuple[dict[str, dict], dict[str, list[bytes]]]:

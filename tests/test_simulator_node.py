@@ -84,7 +84,7 @@ def test_the_recording_holds_what_was_published(twenty_steps):
     assert list(joint.name) == list(PHYSICAL_JOINTS)
     tf = topics["/tf"][100][1]
     frames = {(t.header.frame_id, t.child_frame_id) for t in tf.transforms}
-    assert ("world", "base_link") in frames and ("base_link", "torso") in frames and len(frames) == 8
+    assert ("odom", "base_link") in frames and ("base_link", "torso") in frames and len(frames) == 8
     assert "<robot" in topics["/robot_description"][0][1].data
     # The stance foot moves forward by L each step and alternates sides.
     feet = {m.step: (m.stance_foot.x, m.stance_foot.y, m.stance_side) for _, m in topics["/angular_momentum"]}
@@ -124,7 +124,7 @@ def test_an_independent_subscriber_sees_the_topics(planner_node, tmp_path):
     print(f"\n/joint_states: {len(joints)} messages at {rate:.0f} Hz wall time")
     assert 400 < rate < 600
     odom = got["odom"][-1]
-    assert odom.header.frame_id == "world" and odom.child_frame_id == "base_link"
+    assert odom.header.frame_id == "odom" and odom.child_frame_id == "base_link"
     assert 0.8 < odom.pose.pose.position.z < 0.95  # the pelvis stays about a leg length up
     momentum = got["momentum"][-1]
     assert momentum.header.frame_id == "world" and momentum.stance_side in ("left", "right")

@@ -21,8 +21,10 @@ are serialized at once (``walk_messages``). Controls: ``~/pause``, ``~/resume``,
 the step counter ``~/iterations`` (``sim_controls``).
 
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
-recovers by its per-step re-aim, with momentum steering (``recovery``). Speed: ``/cmd_vel``
-(geometry_msgs/Twist, linear.x in m/s), walked with transition steps (``speed_command``).
+recovers by its per-step re-aim, with momentum steering (``recovery``). Speed and turn:
+``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in rad/s), walked
+with transition steps within the envelope published on ``~/velocity_envelope``
+(biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
 
 Outcomes: the walk finished (exit status 0), the robot fell, the walk could not start (a plan
 that cannot be walked, a plan naming a parameter set that is neither shipped nor this node's
@@ -67,7 +69,7 @@ from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
-from ..core.walking.transitions import MAX_CHANGE, SPEED_RULES
+from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
 from ..core.walking.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
@@ -120,6 +122,10 @@ PARAMETERS = (
           "walkable atlas gaits; without a current atlas a fixed cadence) or 'cadence' (the plan's period)",
           choices=SPEED_RULES),
     Param("max_speed_change", MAX_CHANGE, "largest change of the walked gait's speed per step (m/s)", 0.001, 1.0),
+    Param("max_curvature", MAX_CURVATURE, "largest curvature /cmd_vel turns on, |angular.z / linear.x| (1/m; the "
+          "turn radius at least its inverse; models with hip roll and yaw joints)", 0.0, 2.0),
+    Param("max_curvature_change", MAX_CURVATURE_CHANGE, "largest change of the walked gait's curvature per step (1/m)",
+          0.001, 2.0),
     Param("record", True, "record everything published to MCAP (true/false)"),
     Param("record_dir", "bags", "directory of the recordings (path)"),
     Param("chunk_size", DEFAULT_CHUNK_SIZE, "MCAP chunk size (bytes): at most this much is lost if the process is "
@@ -181,7 +187,8 @@ class SimulatorNode(Node):
         self.pub_description = publisher(String, topics.ROBOT_DESCRIPTION, LATCHED)
         self.pub_tf_static = publisher(TFMessage, topics.TF_STATIC, LATCHED)
         self.phases = GaitPhases(publisher(GaitPhase, topics.GAIT_PHASE, EVENTS))
-        self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"])
+        self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"], value["max_curvature"],
+                                  value["max_curvature_change"], publisher)
         self.create_subscription(Twist, topics.CMD_VEL, self.speed.on_twist, 10)
         self.create_service(Push, "~/push", self._on_push, callback_group=self._group)
         self.sampled = {topics.JOINT_STATES: self.pub_joints, topics.ODOM: self.pub_odom,

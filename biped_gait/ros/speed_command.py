@@ -1,11 +1,16 @@
-"""The simulator's speed command: ``/cmd_vel`` (geometry_msgs/Twist; linear.x in m/s, as ROS
-walking engines take it) walked by the core's speed follower with transition steps
-(docs/model.md section 8.8). No physics here.
+"""The simulator's speed command: ``/cmd_vel`` (geometry_msgs/Twist in ``base_link``, REP 103:
+linear.x in m/s, angular.z in rad/s, positive turning left, as ROS walking engines take it)
+walked by the core's speed follower with transition steps (docs/model.md section 8.8). No
+physics here.
 
 The follower is made when the walk starts, for its gait (``transitions.follower_for``: the rule
 ``least_effort`` needs the current gait atlas, else the walker keeps a fixed cadence, with a
-warning). Each command is clamped to the rule's speeds (a warning when the clamped command
-changes); the other twist components are ignored (a warning once): the walk is straight.
+warning). A command is walked as the gait of speed linear.x on the circle of radius
+linear.x / angular.z (a model with hip roll and yaw joints; the others walk straight and ignore
+angular.z, with a warning once), clamped to the envelope (a warning stating it when the clamped
+command changes), which is published on ``~/velocity_envelope`` (transient local) when the walk
+starts. linear.y (no sideways gaits), linear.z, angular.x and angular.y are ignored (a warning
+once).
 """
 
 from __future__ import annotations
@@ -13,66 +18,100 @@ from __future__ import annotations
 import math
 import threading
 
+from biped_gait_interfaces.msg import VelocityEnvelope
 from geometry_msgs.msg import Twist
 from rclpy.node import Node
+from std_msgs.msg import Header
 
 from ..core.dynamics.settings import DEFAULTS
-from ..core.walking.transitions import SpeedFollower, follower_for
+from ..core.walking.world import BASE_FRAME
+from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.walk import Walker
+from ..recording import topics
+from .qos import LATCHED
+from .walk_messages import stamp_msg
 
 
 class SpeedCommand:
-    """/cmd_vel for ``node``'s walk: speed rule ``rule``, at most ``max_change`` (m/s) of change
-    of the aimed gait's speed per step."""
+    """/cmd_vel for ``node``'s walk: speed rule ``rule``, at most ``max_change`` (m/s) and
+    ``max_curvature_change`` (1/m) of change of the aimed gait's speed and curvature per step,
+    curvatures up to ``max_curvature`` (1/m); ``publisher`` makes the envelope's publisher
+    (message type, topic, QoS), recorded with the rest."""
 
-    def __init__(self, node: Node, rule: str, max_change: float) -> None:
+    def __init__(self, node: Node, rule: str, max_change: float, max_curvature: float, max_curvature_change: float,
+                 publisher) -> None:
         self.node, self.rule, self.max_change = node, rule, max_change
+        self.max_curvature, self.max_curvature_change = max_curvature, max_curvature_change
         self.follower: SpeedFollower | None = None
-        self._pending: float | None = None  # a command that came before the walk started
+        self._pending: tuple[float, float] | None = None  # a command that came before the walk started
         self._lock = threading.Lock()
-        self._said_clamped: float | None = None
-        self._said_ignored = False
+        self._said_clamped: tuple[float, float] | None = None
+        self._said_ignored: set[str] = set()
+        self.pub_envelope = publisher(VelocityEnvelope, topics.VELOCITY_ENVELOPE, LATCHED)
 
     def start(self, walker: Walker, source: str | None) -> None:
-        """Make the follower of ``walker``'s gait (``source``: its parameter set as given)."""
-        follower, note = follower_for(walker, DEFAULTS, self.rule, self.max_change, source)
+        """Make the follower of ``walker``'s gait (``source``: its parameter set as given), and
+        publish its envelope."""
+        follower, note = follower_for(walker, DEFAULTS, self.rule, self.max_change, source, self.max_curvature,
+                                      self.max_curvature_change)
         if note:
             self.node.get_logger().warn(f"speed command: {note}")
-        self.node.get_logger().info(f"speed command: {follower.rule.describe()}")
+        self.node.get_logger().info(f"speed command: {follower.rule.describe()}; envelope {follower.envelope.describe()}")
+        self.pub_envelope.publish(envelope_msg(follower.envelope, follower.rule.describe(),
+                                               stamp_msg(self.node.get_clock().now().nanoseconds)))
         with self._lock:
             self.follower, pending = follower, self._pending
         if pending is not None:
-            self._command(pending)
+            self._command(*pending)
 
     def on_twist(self, msg: Twist) -> None:
-        """A /cmd_vel message: its linear.x is the commanded speed (m/s)."""
-        if not self._said_ignored and any(abs(v) > 1e-9 for v in (msg.linear.y, msg.linear.z, msg.angular.x,
-                                                                   msg.angular.y, msg.angular.z)):
-            self._said_ignored = True
-            self.node.get_logger().warn("speed command: only linear.x is followed (the walk is straight); "
-                                        "the other components are ignored")
-        if not math.isfinite(msg.linear.x):
-            self.node.get_logger().warn(f"speed command: a speed must be finite, got {msg.linear.x}: ignored")
+        """A /cmd_vel message: linear.x the commanded speed (m/s), angular.z the yaw rate (rad/s)."""
+        ignored = [name for name, value in (("linear.y", msg.linear.y), ("linear.z", msg.linear.z),
+                                            ("angular.x", msg.angular.x), ("angular.y", msg.angular.y))
+                   if abs(value) > 1e-9 and name not in self._said_ignored]
+        if ignored:
+            self._said_ignored.update(ignored)
+            why = " (the gaits have no sideways step)" if "linear.y" in ignored else ""
+            self.node.get_logger().warn(f"speed command: {', '.join(ignored)} ignored{why}")
+        if not (math.isfinite(msg.linear.x) and math.isfinite(msg.angular.z)):
+            self.node.get_logger().warn(f"speed command: linear.x and angular.z must be finite, got "
+                                        f"{msg.linear.x}, {msg.angular.z}: ignored")
             return
         with self._lock:
             if self.follower is None:
-                self._pending = msg.linear.x
+                self._pending = (msg.linear.x, msg.angular.z)
                 return
-        self._command(msg.linear.x)
+        self._command(msg.linear.x, msg.angular.z)
 
-    def _command(self, speed: float) -> None:
-        walked, clamped = self.follower.command(speed)
-        if clamped and walked != self._said_clamped:
-            rule = self.follower.rule
-            self.node.get_logger().warn(f"speed command {speed:g} m/s is outside the admissible speeds "
-                                        f"[{rule.low:.3f}, {rule.high:.3f}] m/s: clamped to {walked:.3f} m/s")
-        self._said_clamped = walked if clamped else None
+    def _command(self, speed: float, yaw_rate: float) -> None:
+        follower = self.follower
+        if yaw_rate and follower.envelope.max_curvature == 0.0 and "angular.z" not in self._said_ignored:
+            self._said_ignored.add("angular.z")
+            self.node.get_logger().warn("speed command: angular.z ignored: the model walks straight (turning needs "
+                                        "hip roll and yaw joints, e.g. params aoustin2013-hips)")
+            yaw_rate = 0.0
+        walked, turned, clamped = follower.command(speed, yaw_rate)
+        if clamped and (walked, turned) != self._said_clamped:
+            self.node.get_logger().warn(
+                f"speed command {speed:g} m/s, {yaw_rate:g} rad/s is outside the envelope "
+                f"({follower.envelope.describe()}): clamped to {walked:.3f} m/s, {turned:.3f} rad/s")
+        self._said_clamped = (walked, turned) if clamped else None
 
     def before_step(self, walker: Walker) -> None:
-        """One transition towards the commanded speed, if the walker is not at it (walker thread)."""
+        """One transition towards the commanded speed and turn, if the walker is not at them
+        (walker thread)."""
         if self.follower is None:
             return
         transition = self.follower.before_step(walker)
         if transition is not None and transition.failure:
             self.node.get_logger().warn(f"speed command: no transition before step {transition.step}: "
                                         f"{transition.failure}")
+
+
+def envelope_msg(envelope: Envelope, rule: str, stamp) -> VelocityEnvelope:
+    """The VelocityEnvelope message of ``envelope`` (speed rule described by ``rule``)."""
+    return VelocityEnvelope(
+        header=Header(stamp=stamp, frame_id=BASE_FRAME), min_linear_x=envelope.low, max_linear_x=envelope.high,
+        max_curvature=envelope.max_curvature, max_angular_z=envelope.max_curvature * envelope.high,
+        max_linear_x_change=envelope.max_change, max_curvature_change=envelope.max_curvature_change,
+        follows_linear_y=False, speed_rule=rule, description=envelope.describe())

@@ -22,7 +22,7 @@ from tf2_msgs.msg import TFMessage
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
 from ..core.walking.walk import Touchdown
-from ..core.walking.world import BASE_FRAME, WORLD_FRAME, Transform as WorldTransform, WorldPictures
+from ..core.walking.world import BASE_FRAME, ODOM_FRAME, WORLD_FRAME, Transform as WorldTransform, WorldPictures
 from ..recording import topics
 from .cdr_templates import CdrTemplate
 
@@ -66,9 +66,9 @@ def joint_state_msg(names: tuple[str, ...], floats: np.ndarray, ints: np.ndarray
 
 
 def odometry_msg(floats: np.ndarray, ints: np.ndarray) -> Odometry:
-    """The pelvis (``base_link``) pose in ``world`` (position m, quaternion x y z w) and its
+    """The pelvis (``base_link``) pose in ``odom`` (REP 105; position m, quaternion x y z w) and its
     twist in ``base_link`` (m/s, rad/s): ``floats`` in that order, stamped ``ints`` (s, ns)."""
-    odom = Odometry(header=Header(stamp=_time(ints), frame_id=WORLD_FRAME), child_frame_id=BASE_FRAME)
+    odom = Odometry(header=Header(stamp=_time(ints), frame_id=ODOM_FRAME), child_frame_id=BASE_FRAME)
     odom.pose.pose.position = _point(floats[0:3])
     odom.pose.pose.orientation = _quaternion(floats[3:7])
     odom.twist.twist.linear = _vector(floats[7:10])
@@ -95,9 +95,9 @@ def tf_msg(transforms: list[WorldTransform], stamp: TimeMsg) -> TFMessage:
 
 
 def _moving_tf_msg(frames: tuple[tuple[str, str], ...], floats: np.ndarray, ints: np.ndarray) -> TFMessage:
-    """/tf of the pelvis in ``world`` and of each (parent, child) link of ``frames``: 7 numbers
+    """/tf of the pelvis in ``odom`` and of each (parent, child) link of ``frames``: 7 numbers
     each (translation m, quaternion x y z w), stamped ``ints`` (s, ns)."""
-    links = [(WORLD_FRAME, BASE_FRAME), *frames]
+    links = [(ODOM_FRAME, BASE_FRAME), *frames]
     return tf_msg([WorldTransform(parent, child, floats[7 * k:7 * k + 3], floats[7 * k + 3:7 * k + 7])
                    for k, (parent, child) in enumerate(links)], _time(ints))
 

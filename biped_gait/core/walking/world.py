@@ -24,6 +24,7 @@ from ..model.exchange import world_axes
 from ..model.urdf import UrdfJoints, make_urdf
 
 WORLD_FRAME = "world"
+ODOM_FRAME = "odom"  # REP 105: world -> odom (static, the identity: the simulated odometry is exact) -> base_link
 BASE_FRAME = "base_link"
 
 
@@ -84,7 +85,7 @@ class WorldPictures:
 
     def state(self, i: int) -> WorldState:
         """The ``i``-th instant as a ``WorldState``."""
-        links = [Transform(WORLD_FRAME, BASE_FRAME, self.pelvis_position[i], self.pelvis_quaternion[i])]
+        links = [Transform(ODOM_FRAME, BASE_FRAME, self.pelvis_position[i], self.pelvis_quaternion[i])]
         links += [Transform(parent, child, translation, quaternion) for (parent, child), translation, quaternion
                   in zip(self.link_frames, self.link_translations[i], self.link_quaternions[i])]
         return WorldState(
@@ -137,8 +138,9 @@ class WorldView:
         raise LookupError(f"no link at joint {self.urdf_model.names[jid]}")
 
     def static_transforms(self) -> list[Transform]:
-        """The URDF's fixed joints (hands and feet), for /tf_static."""
-        out = []
+        """``world`` -> ``odom`` (the identity: the walk's odometry is exact, REP 105) and the URDF's
+        fixed joints (hands and feet), for /tf_static."""
+        out = [Transform(WORLD_FRAME, ODOM_FRAME, np.zeros(3), np.array([0.0, 0.0, 0.0, 1.0]))]
         for frame in self.urdf_model.frames:
             if frame.type == pin.FrameType.BODY and not frame.placement.isIdentity():
                 parent = self._link_of_joint(frame.parentJoint)
