@@ -125,7 +125,7 @@ def test_steering_gains_are_the_plain_reaims_linearization(planner, default_gait
         row = impact.momentum_row[3:]
         shift = ref.momentum + d_momentum - row @ gait.step.qd_b  # the momentum held at M_p + d_momentum
         xd_b = np.concatenate([np.zeros(3), gait.step.qd_b + shift * row / (row @ row)])
-        v = walker._reaim(hybrid.exchange.configuration(q_pre), impact, xd_b)
+        v = walker._reaim(hybrid.exchange.configuration(q_pre), impact, xd_b, 0.0)
         end = hybrid.flow(32).propagate(hybrid.exchange.configuration(q_pre), v, walker.next_period)
         return float(momentum_row(hybrid, end.q) @ end.qd)
 

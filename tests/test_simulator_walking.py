@@ -159,7 +159,7 @@ def test_a_ramp_of_cmd_vel_is_walked_at_the_commanded_speed(planner_node, tmp_pa
     print(f"mean speed over steps 14-17: {mean:.4f} m/s (command 0.8 m/s)")
     assert mean == pytest.approx(0.8, rel=0.02)
     log = (tmp_path / "biped-gait-simulator.log").read_text()
-    assert "speed command 3 m/s is outside the admissible speeds" in log and "clamped to" in log
+    assert "speed command 3 m/s, 0 rad/s is outside the envelope (linear.x in [" in log and "clamped to" in log
     # The phases: a single support per step (right foot on even steps), a double support at each
     # touchdown, from the first single support received on.
     first = next(k for k, p in enumerate(phases) if p.phase != GaitPhase.DOUBLE_STANCE)

@@ -136,7 +136,7 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
                     "## Where the project and the paper differ, and why",
                     "## Where walking is possible (maps beyond the paper)", "## Stability of the gaits (beyond the paper)",
                     "## The physics a reviewer would check (beyond the paper)", "### Beside human walking",
-                    "## The walk: stability, pushes, commanded speed"):
+                    "## The walk: stability, pushes, commanded speed", "## Walking on circles (beyond the paper)"):
         assert heading in text
     links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
     assert links[:3] == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]

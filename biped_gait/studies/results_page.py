@@ -30,6 +30,7 @@ from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
 from .hips_page import HIPS_PARAMS, hips_lines, hips_study
+from .turning_page import FIGURE as TURNING_FIGURE, Turning, turning_figure, turning_lines, turning_study
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
 from .walking_page import ALPHA_STEP as WALK_ALPHA_STEP, Walking, compute_walking, walking_figures, walking_section
 
@@ -369,6 +370,7 @@ class Extensions:
     reviewer: ReviewerChecks | None = None
     walking: Walking | None = None
     hips: Study | None = None
+    turning: Turning | None = None
 
 
 STABILITY_FIGURE = "stability.png"
@@ -404,7 +406,7 @@ def render(
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
               if not path.startswith(("map-", "walk-", f"fig4-{HIPS_PARAMS}"))
-              and path not in (STABILITY_FIGURE, RATE_FIGURE)]
+              and path not in (STABILITY_FIGURE, RATE_FIGURE, TURNING_FIGURE)]
     for study in studies:
         label = " (default)" if study is default else ""
         lines += ["", f"## Parameter set `{study.params.name}`{label}", "", "Effort of the double support (N m s):",
@@ -430,6 +432,13 @@ def render(
         lines += hips_lines(default, extensions.hips)
         lines += ["", f"![Fig. 4, parameter set {extensions.hips.params.name}]"
                   f"(fig4-{extensions.hips.params.name}.png)", ""]
+    if extensions.turning is not None:
+        lines += ["", "## Walking on circles (beyond the paper)", "",
+                  "The paper's last perspective: with the hips' yaw and roll joints the biped walks curves. On a circle "
+                  "of radius R (R > 0 turns left) the periodic orbit is a stride of two steps, periodic modulo a yaw "
+                  "rotation of 2 L / R (docs/model.md sections 3.1 and 4.9), planned like the straight gait and walked "
+                  "by the simulator (`-p turn_radius:=R`, or `/cmd_vel` angular.z).", ""]
+        lines += turning_lines(extensions.turning)
     lines += _maps_section(extensions.maps, figures)
     if extensions.stability:
         lines += ["", "## Stability of the gaits (beyond the paper)", "",
@@ -476,6 +485,7 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     figures.update(walking_figures(extensions.walking, default.params.name))
     figures[f"Fig. 4, parameter set {extensions.hips.params.name}"] = (extensions.hips.fig4(),
                                                                     f"fig4-{extensions.hips.params.name}.png")
+    figures["Effort per metre against the turn radius"] = (turning_figure(extensions.turning), TURNING_FIGURE)
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, extensions))
@@ -494,4 +504,5 @@ def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMa
     checks = ReviewerChecks(readings, rate_bound_curve(params, math.radians(PAPER_ALPHA_DEG)),
                             human_comparison(params, coarse_step=coarse_step))
     walking = compute_walking(executor, default, walk_alpha_step)
-    return Extensions(all_maps, [p.result() for p in points], checks, walking, hips_study(executor, coarse_step))
+    return Extensions(all_maps, [p.result() for p in points], checks, walking, hips_study(executor, coarse_step),
+                      turning_study(executor))

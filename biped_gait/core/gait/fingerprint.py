@@ -35,16 +35,22 @@ def _strip_docstrings(tree: ast.AST) -> ast.AST:
     return tree
 
 
-@lru_cache(maxsize=1)
-def code_fingerprint() -> str:
-    """SHA-256 of the model code (``MODEL_CODE``), comments and docstrings left out."""
-    digest = hashlib.sha256(f"atlas format {ATLAS_FORMAT}\n".encode())
-    for name in MODEL_CODE:
+def code_digest(head: str, names: tuple[str, ...]) -> str:
+    """SHA-256 of ``head`` and of the core modules ``names`` (paths in the core), comments and
+    docstrings left out of the Python ones."""
+    digest = hashlib.sha256(f"{head}\n".encode())
+    for name in names:
         text = (_CORE / name).read_text()
         if name.endswith(".py"):
             text = ast.dump(_strip_docstrings(ast.parse(text)))
         digest.update(f"{name}\n{text}\n".encode())
     return digest.hexdigest()
+
+
+@lru_cache(maxsize=1)
+def code_fingerprint() -> str:
+    """SHA-256 of the model code (``MODEL_CODE``), comments and docstrings left out."""
+    return code_digest(f"atlas format {ATLAS_FORMAT}", MODEL_CODE)
 
 
 def model_fingerprint(params: BipedParams) -> str:

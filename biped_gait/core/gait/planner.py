@@ -35,6 +35,7 @@ from .figures import StepFigures, energy_drift, step_figures
 from ..dynamics.settings import DEFAULTS, Settings
 from .stability import PoincareMap, multipliers_of, open_loop
 from .stride import solve_stride
+from .turning_atlas import TurningAtlas, turning_atlas_path
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
 BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm start left the branch
@@ -171,6 +172,7 @@ class GaitPlanner:
         self.params = params if isinstance(params, BipedParams) else load_params(params)
         self.use_atlas = atlas
         self._atlases: dict[GaitMode, Atlas | None] = {}
+        self._turning_atlases: dict[GaitMode, TurningAtlas | None] = {}
         self.atlas_notes: dict[GaitMode, str] = {}
         self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
@@ -225,18 +227,48 @@ class GaitPlanner:
         if not math.isfinite(problem.turn_radius):
             raise ValueError("a straight gait is one step: plan it with plan")
         start = time.perf_counter()
+        stride = None
+        atlas = self.turning_atlas(problem.mode) if guess is None else None
+        point = (problem.step_length, problem.period, problem.arm_amplitude, 1.0 / problem.turn_radius)
+        if atlas is not None and (atlas_guess := atlas.guess(point)) is not None:
+            stride = self._stride(problem, atlas_guess, "atlas", stability)
+            if not (stride.converged and _stride_near(stride, atlas_guess)):
+                stride = None
         path: list[tuple[float, StrideGuess]] = []
-        found = "guess"
-        if guess is None:
-            straight = self.plan(replace(request, turn_radius=math.inf))
-            if not straight.converged:
-                raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
-            found, path = "continuation", self._curvature_path(problem, straight)
-            guess = path[-1][1]
-        stride = self._stride(problem, guess, found, stability)
+        if stride is None:
+            found = "guess"
+            if guess is None:
+                straight = self.plan(replace(request, turn_radius=math.inf))
+                if not straight.converged:
+                    raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
+                found, path = "continuation", self._curvature_path(problem, straight)
+                guess = path[-1][1]
+            stride = self._stride(problem, guess, found, stability)
         if not stride.admissible:
-            stride = replace(stride, hint=self._radius_hint(problem, path))
+            smallest = atlas.smallest_radius(point[:3]) if atlas is not None and atlas.grid.contains(
+                (*point[:3], abs(point[3]))) else None
+            if smallest is not None:
+                radius, (length, period, alpha) = smallest
+                hint = (f"smallest admissible turn radius (turning atlas grid) at L = {length:g} m, T = {period:g} s, "
+                        f"alpha = {math.degrees(alpha):.0f} deg: {radius:.3g} m")
+            else:
+                hint = self._radius_hint(problem, path or self._curvature_path(problem, self.plan(
+                    replace(request, turn_radius=math.inf))))
+            stride = replace(stride, hint=hint)
         return replace(stride, solve_time_s=time.perf_counter() - start)
+
+    def turning_atlas(self, mode: GaitMode) -> TurningAtlas | None:
+        """The current turning atlas of these parameters and ``mode`` (loaded once), or None (no
+        lateral hips, no atlas, or a stale one: said once, as for ``atlas``)."""
+        if mode not in self._turning_atlases:
+            atlas = None
+            if self.use_atlas and self.params.joints.lateral_hips:
+                try:
+                    atlas = TurningAtlas.load(turning_atlas_path(self.params, mode), self.params, self.source)
+                except AtlasError as exc:
+                    self._note(f"{exc}; planning strides without it ({mode.value} gaits)")
+            self._turning_atlases[mode] = atlas
+        return self._turning_atlases[mode]
 
     def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess`` on the fine grid, its closures matched
@@ -436,6 +468,12 @@ class GaitPlanner:
         q, qd = hermite_samples(step.nodes, times)
         samples = self.hybrid.samples
         return step_figures(samples, times, q, qd, period, energy_drift(samples, step.nodes[1], step.nodes[2]))
+
+
+def _stride_near(stride: Stride, guess: StrideGuess) -> bool:
+    """Whether the solved ``stride`` stayed on the branch of its warm start (``BRANCH_BOUND``)."""
+    a, b = stride.steps
+    return max(float(np.max(np.abs(a.qd_a - guess[0]))), float(np.max(np.abs(b.qd_a - guess[2])))) <= BRANCH_BOUND
 
 
 def _near(gait: Gait, guess: tuple[np.ndarray, float]) -> bool:
