@@ -273,18 +273,23 @@ class GaitPlanner:
     def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess`` on the fine grid, its closures matched
         to what the spin moments do (legs leaning), with its multipliers if ``stability``."""
-        targets = (0.0, 0.0)
+        targets = np.zeros(2)
+        closure = _ClosureRounds()
         for _ in range(CLOSURE_ROUNDS):
             solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
-                                    problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow, targets)
+                                    problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow,
+                                    tuple(targets))
             a, b = solution.steps
             steps = (self.step_gait(problem, a, found, b.qd_a), self.step_gait(problem, b, found, a.qd_a))
             if not all(g.double_support is not None and g.double_support.impulses.success for g in steps):
                 break
-            targets = tuple(-g.double_support.foot_line_moment for g in steps)
-            if max(abs(g.step.closure_gap - t) for g, t in zip(steps, targets)) <= self.settings.tolerance:
+            asked = np.array([-g.double_support.foot_line_moment for g in steps])
+            if max(abs(g.step.closure_gap - t) for g, t in zip(steps, asked)) <= self.settings.tolerance:
                 break
+            targets = closure.next(targets, asked)
             guess = (a.qd_a, a.theta, b.qd_a, b.theta)
+        else:  # the rounds ran out: no consistent double supports (the LPs flip between vertices)
+            steps = (self._unsettled(problem, a, found, b.qd_a), self._unsettled(problem, b, found, a.qd_a))
         multipliers = None
         if stability and all(g.double_support is not None and g.double_support.impulses.success for g in steps):
             maps = [PoincareMap(self.hybrid, self.flow, problem.period, g.double_support.impulses.i_minus,
@@ -408,11 +413,22 @@ class GaitPlanner:
                              problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
                              problem.step_width, closure_target=-ds.foot_line_moment)
             gait = self.step_gait(problem, step, found)
+        else:
+            if gait.double_support is not None and gait.double_support.foot_line_moment != 0.0:
+                gait = self._unsettled(problem, step, found)
         if gait.double_support is not None and gait.double_support.impulses.success:
             impulses = gait.double_support.impulses
             gait = replace(gait, stability=open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
                                                      impulses.i_minus, impulses.i_plus))
         return gait
+
+    def _unsettled(self, problem: GaitProblem, step: BvpSolution, found: str,
+                   next_qd_a: np.ndarray | None = None) -> Gait:
+        """The gait of a step whose closure did not settle on what its double support's spin
+        moments change in ``CLOSURE_ROUNDS`` rounds: not converged, saying so."""
+        message = (f"the closure does not settle on what the double support's spin moments change (legs leaning; "
+                   f"{CLOSURE_ROUNDS} rounds)")
+        return self.step_gait(problem, replace(step, converged=False, message=message), found, next_qd_a)
 
     def step_gait(self, problem: GaitProblem, step: BvpSolution, found: str,
                   next_qd_a: np.ndarray | None = None) -> Gait:
@@ -468,6 +484,27 @@ class GaitPlanner:
         q, qd = hermite_samples(step.nodes, times)
         samples = self.hybrid.samples
         return step_figures(samples, times, q, qd, period, energy_drift(samples, step.nodes[1], step.nodes[2]))
+
+
+class _ClosureRounds:
+    """Broyden's method on a stride's closure targets t (kg m^2/s, at C1 and C2): r(t) = what
+    the LPs' spin moments ask - t, from the Jacobian -I (the first step is the plain fixed point
+    t = ask: the ask depends little on t); the LPs are piecewise linear, so two or three rounds
+    past the first reach 1e-12 where the plain fixed point takes six."""
+
+    def __init__(self) -> None:
+        self.jacobian = -np.eye(2)
+        self.last: tuple[np.ndarray, np.ndarray] | None = None
+
+    def next(self, targets: np.ndarray, asked: np.ndarray) -> np.ndarray:
+        """The next targets after a round at ``targets`` whose LPs asked ``asked``."""
+        residual = asked - targets
+        if self.last is not None:
+            step, change = targets - self.last[0], residual - self.last[1]
+            if step @ step > 0:
+                self.jacobian += np.outer(change - self.jacobian @ step, step) / (step @ step)
+        self.last = (targets, residual)
+        return targets - np.linalg.solve(self.jacobian, residual)
 
 
 def _stride_near(stride: Stride, guess: StrideGuess) -> bool:

@@ -25,6 +25,7 @@ from .configurations import GaitMode, arm_angles
 
 TOLERANCE = 1e-14  # m: the legs' lengths
 ITERATIONS = 30
+PLACED_CACHE = 8  # legs placements kept (each stride uses two: R for A, -R for B)
 
 
 class TurningConfiguration:
@@ -43,6 +44,7 @@ class TurningConfiguration:
         self.index = {(side, role): bm.index(role, side) for side in ("stance", "swing") for role in self.roles}
         self.roll, self.pitch = bm.index("ankle_roll"), bm.index("ankle_pitch")
         self.arms = (bm.index("shoulder", "stance"), bm.index("shoulder", "swing"))
+        self._cache: dict[tuple[float, float, float], tuple[float, list]] = {}
 
     def __call__(self, step_length: float, arm_amplitude: float, mode: GaitMode, theta: float, radius: float,
                  lean: float = 0.0) -> np.ndarray:
@@ -54,13 +56,8 @@ class TurningConfiguration:
             raise ValueError(f"turn radius must be finite and more than the hips' half spacing "
                              f"({self.half_width:g} m), got {radius:g} m")
         half = step_length / (2 * radius)  # half the heading change per step (rad), signed
-        x = self._straighten(radius, half, np.array([0.0, math.sqrt(self.leg_length ** 2 - step_length ** 2 / 4)]))
-        feet = self._legs(radius, half, *x)[2]
-        shift = math.copysign(x[1] * math.tan(lean), radius)  # towards the centre, by the upright height
-        if lean:
-            x = self._straighten(radius, half, x, shift, feet)
-        _, shins, _ = self._legs(radius, half, *x, shift, feet)
-        pelvis = _rot("z", half) @ _rot("x", x[0]) @ _rot("y", theta)  # in the stance foot's frame
+        roll, shins = self._placed(step_length, radius, lean)
+        pelvis = _rot("z", half) @ _rot("x", roll) @ _rot("y", theta)  # in the stance foot's frame
         q = np.zeros(self.bm.nq)
         q[self.roll], q[self.pitch] = shins[0][0], shins[0][1]
         for (_, _, shin), side, sign in zip(shins, ("stance", "swing"), (-1.0, 1.0)):
@@ -70,6 +67,24 @@ class TurningConfiguration:
         a6, a7 = arm_angles(arm_amplitude, mode)
         q[self.arms[0]], q[self.arms[1]] = -a6, -a7
         return q
+
+    def _placed(self, step_length: float, radius: float, lean: float) -> tuple[float, list]:
+        """The pelvis roll (rad) and both shins (roll rad, pitch rad, orientation) of a step of
+        ``step_length`` (m) on the circle of ``radius`` (m) leaning by ``lean`` (rad): what
+        theta does not change (the legs stay as the pelvis pitches), kept for the last
+        ``PLACED_CACHE`` requests (a solve asks for the same step at many theta)."""
+        key = (step_length, radius, lean)
+        if key not in self._cache:
+            half = step_length / (2 * radius)
+            x = self._straighten(radius, half, np.array([0.0, math.sqrt(self.leg_length ** 2 - step_length ** 2 / 4)]))
+            feet = self._legs(radius, half, *x)[2]
+            shift = math.copysign(x[1] * math.tan(lean), radius)  # towards the centre, by the upright height
+            if lean:
+                x = self._straighten(radius, half, x, shift, feet)
+            if len(self._cache) >= PLACED_CACHE:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = (float(x[0]), self._legs(radius, half, *x, shift, feet)[1])
+        return self._cache[key]
 
     def _straighten(self, radius: float, half: float, x: np.ndarray, shift: float = 0.0,
                     feet: list[np.ndarray] | None = None) -> np.ndarray:
