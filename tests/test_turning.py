@@ -11,6 +11,7 @@ import pytest
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.model.exchange import next_heading
+from biped_gait.core.walking.push import Push
 from biped_gait.core.walking.walk import PlannedOrbit, Walker
 
 pytestmark = pytest.mark.core
@@ -107,3 +108,31 @@ def test_a_radius_too_small_is_refused_with_the_smallest_radius(hips):
 def test_a_circle_needs_lateral_hips():
     with pytest.raises(ValueError, match="needs hip roll and yaw joints"):
         GaitPlanner("aoustin2013").plan_stride(request(2.0))
+
+
+def test_pushes_while_turning_are_recovered_or_falls_with_their_reason(hips, strides):
+    """On the circle, with momentum steering: 0.5 N s sideways at mid-step is recovered (back
+    within 1e-5 of the plan 12 steps later); 1 N s forward is a fall whose reason gives the
+    momentum about the feet line against the plan's; 3 N s forward one the double support
+    cannot take."""
+    stride = strides[0][R_CIRCLE]
+
+    def walk(impulse: list[float]) -> list:
+        walker = Walker(hips.hybrid, cycle(stride), rate=20.0, momentum_rate=0.25)
+        outcomes = []
+        for k in range(16):
+            if k == 2:
+                walker.push(Push(np.array(impulse), 0.2))
+            outcomes.append(walker.walk_step())
+            if outcomes[-1].touchdown is None:
+                break
+        return outcomes
+
+    sideways = walk([0.0, 0.5, 0.0])
+    assert all(o.touchdown is not None for o in sideways) and len(sideways) == 16
+    assert max(o.touchdown.state_error for o in sideways[2:6]) > 0.1  # pushed off the orbit
+    assert max(o.touchdown.state_error for o in sideways[14:]) < 1e-5  # and back on it
+    hard = walk([1.0, 0.0, 0.0])[-1]
+    assert hard.touchdown is None and "the momentum about the feet line, which no impulse changes, is" in hard.fall
+    harder = walk([3.0, 0.0, 0.0])[-1]
+    assert harder.touchdown is None and "the double support at t =" in harder.fall and "has no solution" in harder.fall

@@ -43,7 +43,7 @@ from ..gait.configurations import GaitMode, pitch_direction
 from ..dynamics.flow import hermite_samples
 from ..dynamics.hybrid import HybridStep, ImpactMap
 from ..model.exchange import next_heading, other_side, world_axes
-from ..dynamics.impulses import EffortOptions, solve_impulses
+from ..dynamics.impulses import EffortOptions, friction_ratios, solve_impulses
 from ..model.biped import BipedModel
 from ..model.params import load_params
 from .push import AppliedPush, Push, TrunkPush
@@ -420,6 +420,7 @@ class Walker:
         bm, s = self.bm, self.state
         error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
         foot_line_moment = self.orbit.foot_line_moment  # the plan's, of this double support
+        ending = (self.q_t, self.qd_b)  # the plan's touchdown, before the aim moves to the next step
         if self._next_cycle is not None:
             offset = self.steering.offset if self.steering is not None else None
             self._cycle = self._prepared(self._next_cycle, offset)
@@ -432,7 +433,15 @@ class Walker:
         reachable, miss = planned.reachable()
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
             if self.reaim:
-                qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b, foot_line_moment)
+                try:
+                    qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b,
+                                          foot_line_moment)
+                except Fall as exc:
+                    momentum = float(impact.momentum_row @ planned.xd_b)
+                    planned_momentum = float(self.hybrid.impact(ending[0]).momentum_row @ bm.embed(ending[1]))
+                    raise Fall(f"{exc} (at t = {s.t + t_step:.4f} s the momentum about the feet line, which no "
+                               f"impulse changes, is {momentum:.2f} kg m^2/s where the plan's is "
+                               f"{planned_momentum:.2f}, the touchdown {error:.3g} from the plan's state)") from None
                 problem = replace(planned, xd_a=impact.next_step_velocity(qd_next))
             else:
                 problem = reachable
@@ -441,7 +450,8 @@ class Walker:
                 raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
             sol = solve_impulses(problem, self.orbit.effort, self.orbit.options)
             if not sol.success:
-                raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
+                raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message}): "
+                           f"{self._why_no_impulses(problem)}")
             done = sol.foot_line_moment(problem)
             if not self.reaim or abs(done - foot_line_moment) <= self.settings.tolerance:
                 break
@@ -466,6 +476,23 @@ class Walker:
             correction=float(np.max(np.abs(xd_a[3:] - planned.xd_a[3:]))), equation_residual=sol.equation_residual,
             next_stance_side=self.state.stance_side,
         )
+
+    def _why_no_impulses(self, problem) -> str:
+        """The physical reason a double support has no impulses: the friction cone (the impulses
+        exist without it, needing the friction they need), the joint-rate bound, or none
+        reaches the aimed velocity with the feet pushing on the ground."""
+        options = self.orbit.options
+        if math.isfinite(options.friction):
+            free = solve_impulses(problem, self.orbit.effort, replace(options, friction=math.inf))
+            if free.success:
+                needed = float(friction_ratios(free).max())
+                if not math.isfinite(needed):
+                    return "without the friction cone a foot's vertical reaction impulse is not positive (the ground would pull)"
+                return f"the impulses would need a friction coefficient of {needed:.2f}, more than the ground's {options.friction:g}"
+        if math.isfinite(options.rate_bound):
+            if solve_impulses(problem, self.orbit.effort, replace(options, rate_bound=math.inf)).success:
+                return f"the impulses would need joint rates above the bound of {options.rate_bound:g} rad/s"
+        return "no impulses reach the aimed velocity with the feet pushing on the ground (unilateral contact)"
 
     def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, foot_line_moment: float) -> np.ndarray:
         """The next step's initial velocity (its own coordinates, rad/s), and its duration
