@@ -218,41 +218,62 @@ class Atlas:
     # Files ------------------------------------------------------------------------------------
     def save(self, path: Path) -> Path:
         """Write the atlas as a compressed ``.npz`` (atomically: a temporary file, then renamed)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         meta = {"format": ATLAS_FORMAT, "params": self.params, "mode": self.mode.value, "fingerprint": self.fingerprint,
                 "friction": self.friction, "build_seconds": self.build_seconds}
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "wb") as f:
-            np.savez_compressed(f, meta=np.array(json.dumps(meta)), step_lengths=self.grid.step_lengths,
-                                periods=self.grid.periods, alphas=self.grid.alphas, **self.nodes)
-        os.replace(tmp, path)
-        return path
+        return write_archive(path, meta, {"step_lengths": self.grid.step_lengths, "periods": self.grid.periods,
+                                          "alphas": self.grid.alphas, **self.nodes})
 
     @classmethod
     def load(cls, path: Path, params: BipedParams, source: str | None = None) -> "Atlas":
         """Read an atlas for ``params`` (``source``: the name or file the user gave); ``AtlasError``
         with the rebuild command if the file is unreadable, of another mode format, or stale."""
-        rebuild = rebuild_command(params.name, source)
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                meta = json.loads(str(data["meta"]))
-                if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != model_fingerprint(params):
-                    raise AtlasError(f"the gait atlas {path} is stale (built for other parameters or model code): "
-                                     f"rebuild it with `{rebuild}`")
-                grid = Grid(data["step_lengths"], data["periods"], data["alphas"])
-                nodes = {name: data[name] for name in NODE_ARRAYS}
-        except FileNotFoundError:
-            raise AtlasError(f"no gait atlas at {path}: build it with `{rebuild}`") from None
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
-            if isinstance(exc, AtlasError):
-                raise
-            raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`") from None
-        for name in NODE_ARRAYS:
-            if nodes[name].shape != grid.shape + node_tail(name, params):
-                raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`")
+        meta, data = read_archive(path, "gait atlas", rebuild_command(params.name, source), model_fingerprint(params),
+                                  ("step_lengths", "periods", "alphas", *NODE_ARRAYS))
+        grid = Grid(data["step_lengths"], data["periods"], data["alphas"])
+        nodes = {name: data[name] for name in NODE_ARRAYS}
+        check_shapes(path, "gait atlas", rebuild_command(params.name, source),
+                     {name: grid.shape + node_tail(name, params) for name in NODE_ARRAYS}, nodes)
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
                    float(meta.get("build_seconds", math.nan)))
+
+
+def write_archive(path: Path, meta: dict, arrays: dict[str, np.ndarray]) -> Path:
+    """Write ``arrays`` and the JSON ``meta`` as a compressed ``.npz`` (no pickles), atomically
+    (a temporary file, then renamed)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    with open(tmp, "wb") as f:
+        np.savez_compressed(f, meta=np.array(json.dumps(meta)), **arrays)
+    os.replace(tmp, path)
+    return path
+
+
+def read_archive(path: Path, what: str, rebuild: str, fingerprint: str,
+                 names: tuple[str, ...]) -> tuple[dict, dict[str, np.ndarray]]:
+    """The JSON meta and the arrays ``names`` of the archive of ``what`` (e.g. "gait atlas") at
+    ``path``; ``AtlasError`` (one line, with the ``rebuild`` command) if it is missing,
+    unreadable, of another format or not of ``fingerprint``."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+            if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != fingerprint:
+                raise AtlasError(f"the {what} {path} is stale (built for other parameters or model code): "
+                                 f"rebuild it with `{rebuild}`")
+            return meta, {name: data[name] for name in names}
+    except FileNotFoundError:
+        raise AtlasError(f"no {what} at {path}: build it with `{rebuild}`") from None
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
+        if isinstance(exc, AtlasError):
+            raise
+        raise AtlasError(f"the {what} {path} is unreadable: rebuild it with `{rebuild}`") from None
+
+
+def check_shapes(path: Path, what: str, rebuild: str, shapes: dict[str, tuple[int, ...]],
+                 arrays: dict[str, np.ndarray]) -> None:
+    """``AtlasError`` (unreadable) unless each array has its expected shape."""
+    if any(arrays[name].shape != shape for name, shape in shapes.items()):
+        raise AtlasError(f"the {what} {path} is unreadable: rebuild it with `{rebuild}`")
 
 
 def node_tail(name: str, params: BipedParams) -> tuple[int, ...]:

@@ -15,16 +15,14 @@ steps the same). The file is tied to its parameters and to the model and turning
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .atlas import ON_BRANCH, AtlasError, NodeStatus, cache_dir, is_shipped, rebuild_command, shipped_dir
+from .atlas import (ON_BRANCH, NodeStatus, cache_dir, check_shapes, is_shipped, read_archive, rebuild_command,
+                    shipped_dir, write_archive)
 from .configurations import GaitMode
 from .fingerprint import ATLAS_FORMAT, code_digest, model_fingerprint
 from ..model.params import BipedParams
@@ -149,40 +147,22 @@ class TurningAtlas:
 
     def save(self, path: Path) -> Path:
         """Write the atlas as a compressed ``.npz`` (atomically)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
         meta = {"format": ATLAS_FORMAT, "params": self.params, "mode": self.mode.value, "fingerprint": self.fingerprint,
-                "build_seconds": self.build_seconds, "kind": "turning"}
-        tmp = path.with_name(path.name + ".tmp")
-        with open(tmp, "wb") as f:
-            np.savez_compressed(f, meta=np.array(json.dumps(meta)), step_lengths=self.grid.step_lengths,
-                                periods=self.grid.periods, alphas=self.grid.alphas, curvatures=self.grid.curvatures,
-                                **self.nodes)
-        os.replace(tmp, path)
-        return path
+                "build_seconds": self.build_seconds}
+        return write_archive(path, meta, {"step_lengths": self.grid.step_lengths, "periods": self.grid.periods,
+                                          "alphas": self.grid.alphas, "curvatures": self.grid.curvatures, **self.nodes})
 
     @classmethod
     def load(cls, path: Path, params: BipedParams, source: str | None = None) -> "TurningAtlas":
         """Read the turning atlas of ``params``; ``AtlasError`` (one line, with the rebuild
         command) if it is missing, unreadable or stale."""
         rebuild = rebuild_command(params.name, source) + " --turning"
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                meta = json.loads(str(data["meta"]))
-                if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != turning_fingerprint(params):
-                    raise AtlasError(f"the turning atlas {path} is stale (built for other parameters or model code): "
-                                     f"rebuild it with `{rebuild}`")
-                grid = TurningGrid(data["step_lengths"], data["periods"], data["alphas"], data["curvatures"])
-                nodes = {name: data[name] for name in NODE_ARRAYS}
-        except FileNotFoundError:
-            raise AtlasError(f"no turning atlas at {path}: build it with `{rebuild}`") from None
-        except (OSError, ValueError, KeyError, zipfile.BadZipFile, json.JSONDecodeError) as exc:
-            if isinstance(exc, AtlasError):
-                raise
-            raise AtlasError(f"the turning atlas {path} is unreadable: rebuild it with `{rebuild}`") from None
-        for name in NODE_ARRAYS:
-            if nodes[name].shape != grid.shape + _tail(name, params):
-                raise AtlasError(f"the turning atlas {path} is unreadable: rebuild it with `{rebuild}`")
+        meta, data = read_archive(path, "turning atlas", rebuild, turning_fingerprint(params),
+                                  ("step_lengths", "periods", "alphas", "curvatures", *NODE_ARRAYS))
+        grid = TurningGrid(data["step_lengths"], data["periods"], data["alphas"], data["curvatures"])
+        nodes = {name: data[name] for name in NODE_ARRAYS}
+        check_shapes(path, "turning atlas", rebuild, {name: grid.shape + _tail(name, params) for name in NODE_ARRAYS},
+                     nodes)
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], grid, nodes,
                    float(meta.get("build_seconds", math.nan)))
 
