@@ -407,15 +407,15 @@ class GaitPlanner:
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
             ds = gait.double_support
             if problem.closure != "theta" or ds is None or not ds.impulses.success or \
+                    abs(ds.foot_line_moment) <= self.settings.tolerance or \
                     abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
-                break
+                break  # nothing to match: the spin moments change nothing (or the closure already matches)
             step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                              problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
                              problem.step_width, closure_target=-ds.foot_line_moment)
             gait = self.step_gait(problem, step, found)
         else:
-            if gait.double_support is not None and gait.double_support.foot_line_moment != 0.0:
-                gait = self._unsettled(problem, step, found)
+            gait = self._unsettled(problem, step, found)
         if gait.double_support is not None and gait.double_support.impulses.success:
             impulses = gait.double_support.impulses
             gait = replace(gait, stability=open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
