@@ -14,13 +14,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from tqdm import tqdm
-
 from .core.gait.atlas import Atlas, AtlasError, Grid, atlas_path, rebuild_command
 from .core.gait.configurations import GaitMode
 from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
-from .studies.atlas_build import build_atlas
-from .studies.executors import open_executor
 
 MODES = [m.value for m in GaitMode]
 
@@ -51,6 +47,11 @@ def run(args: argparse.Namespace) -> int:
         for mode in modes:
             print(_describe(params, mode, args.params))
         return 0
+    from tqdm import tqdm  # the build's own imports, here: the other verbs and --help do without them
+
+    from .studies.atlas_build import build_atlas
+    from .studies.executors import open_executor
+
     for mode in modes:
         path = args.out / f"{params.name}-{mode.value}.npz" if args.out else atlas_path(params, mode)
         nodes = Grid.default().shape

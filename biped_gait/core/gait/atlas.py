@@ -7,8 +7,10 @@ warm start of a solve nearby), its status (admissible; inadmissible on the branc
 conditions that limit it; only the backward-knee twin converges; nothing converges), and the
 figures the studies and maps use: W (N m s), min vertical ground reaction (N), min swing
 height (m), max friction ratio, min swing-knee angle q9 (rad), yaw angular momenta at T- and T+
-(kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``:
-a stale or unreadable file is refused with a one-line message that says how to rebuild it.
+(kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``
+(and recognized at once by ``fingerprint.source_fingerprint`` when the code is byte for byte the
+one it was built with): a stale or unreadable file is refused with a one-line message that says how
+to rebuild it.
 
 Files are compressed NumPy archives (``.npz``, no pickles). The shipped atlases are package data
 (``biped_gait/core/data/atlas/``); atlases of a user's parameter file go to the cache
@@ -31,7 +33,7 @@ import numpy as np
 from .admissibility import Limit, describe
 from .configurations import GaitMode
 from .continuation import SPACING
-from .fingerprint import ATLAS_FORMAT, model_fingerprint
+from .fingerprint import ATLAS_FORMAT, model_fingerprint, source_fingerprint
 from ..model.params import BipedParams, load_params, shipped_param_names
 
 STEP_LENGTHS = np.round(np.arange(0.25, 0.65 + 1e-9, 0.025), 6)  # m
@@ -116,7 +118,8 @@ class Grid:
 @dataclass(frozen=True)
 class Atlas:
     """The gaits of one parameter set (``params``, its name; ``friction`` its coefficient) and
-    ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array."""
+    ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array;
+    ``fingerprint`` and ``source`` are the model and source fingerprints it was built with."""
 
     params: str
     mode: GaitMode
@@ -125,6 +128,7 @@ class Atlas:
     grid: Grid
     nodes: dict[str, np.ndarray]
     build_seconds: float = math.nan
+    source: str = ""
 
     @classmethod
     def empty(cls, params: BipedParams, mode: GaitMode, grid: Grid | None = None) -> "Atlas":
@@ -135,7 +139,8 @@ class Atlas:
         for name, (tail, dtype) in NODE_ARRAYS.items():
             fill = NodeStatus.NO_CONVERGENCE if name == "status" else (Limit.NO_CONVERGENCE if name == "limits" else np.nan)
             nodes[name] = np.full(grid.shape + tail, fill, dtype=dtype)
-        return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes)
+        return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes,
+                   source=source_fingerprint(params))
 
     # Queries ----------------------------------------------------------------------------------
     def status(self, index: tuple[int, int, int]) -> NodeStatus:
@@ -220,7 +225,7 @@ class Atlas:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         meta = {"format": ATLAS_FORMAT, "params": self.params, "mode": self.mode.value, "fingerprint": self.fingerprint,
-                "friction": self.friction, "build_seconds": self.build_seconds}
+                "friction": self.friction, "build_seconds": self.build_seconds, "source": self.source}
         tmp = path.with_name(path.name + ".tmp")
         with open(tmp, "wb") as f:
             np.savez_compressed(f, meta=np.array(json.dumps(meta)), step_lengths=self.grid.step_lengths,
@@ -236,7 +241,8 @@ class Atlas:
         try:
             with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
-                if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != model_fingerprint(params):
+                current = meta.get("source") == source_fingerprint(params) or meta.get("fingerprint") == model_fingerprint(params)
+                if meta.get("format") != ATLAS_FORMAT or not current:
                     raise AtlasError(f"the gait atlas {path} is stale (built for other parameters or model code): "
                                      f"rebuild it with `{rebuild}`")
                 grid = Grid(data["step_lengths"], data["periods"], data["alphas"])
@@ -251,7 +257,7 @@ class Atlas:
             if nodes[name].shape != grid.shape + tail:
                 raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`")
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
-                   float(meta.get("build_seconds", math.nan)))
+                   float(meta.get("build_seconds", math.nan)), meta.get("source", ""))
 
 
 def _weights(axis: np.ndarray, x: float, cubic: bool) -> tuple[np.ndarray, np.ndarray]:

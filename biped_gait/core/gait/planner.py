@@ -99,7 +99,8 @@ def validate_request(request: GaitRequest, params: BipedParams) -> GaitProblem:
 
 
 class GaitPlanner:
-    """Plans gaits for one parameter set; keeps its Pinocchio models and hybrid step.
+    """Plans gaits for one parameter set; keeps its Pinocchio models, hybrid step and flows, and
+    its atlases (loaded when it is made, so that its first plan costs what the next ones do).
 
     Not thread-safe (Pinocchio data are reused): give each thread or process its own planner.
     """
@@ -108,8 +109,9 @@ class GaitPlanner:
                  on_note: Callable[[str], None] | None = None):
         """``params``: a parameter set, its name or file (None: the default); ``settings``: the
         numerical settings (grids, tolerance, iterations, samples); ``atlas``: use the gait
-        atlas of these parameters (shipped, or in the cache) when there is a current one;
-        ``on_note``: told (once per mode) why there is none (default: a Python warning)."""
+        atlas of these parameters (shipped, or in the cache) when there is a current one, loaded
+        here for every mode; ``on_note``: told (once per mode) why there is none (default: a
+        Python warning)."""
         self.settings = settings
         self.source = params if isinstance(params, str) else None
         self.params = params if isinstance(params, BipedParams) else load_params(params)
@@ -121,10 +123,12 @@ class GaitPlanner:
         self.hybrid = HybridStep(self.model)
         self.flow = self.hybrid.flow(settings.fine_steps)
         self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
+        for mode in GaitMode:
+            self.atlas(mode)
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
-        """The current atlas of these parameters and ``mode`` (loaded once), or None; why not
-        is in ``atlas_notes[mode]`` (and said once as a warning)."""
+        """The current atlas of these parameters and ``mode`` (loaded once, when the planner is
+        made), or None; why not is in ``atlas_notes[mode]`` (and said once as a warning)."""
         if mode not in self._atlases:
             atlas = None
             if self.use_atlas:

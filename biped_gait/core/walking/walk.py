@@ -198,6 +198,7 @@ class Walker:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if momentum_rate is not None and not reaim:
             raise ValueError("steering the momentum is part of the re-aim: it needs reaim")
+        import scipy.optimize  # noqa: F401  the touchdown guard's root finder (hybrid._root): loaded now, not at a touchdown
         self.hybrid, self.bm, self.rate = hybrid, hybrid.bm, rate
         self.settings = settings
         self.grid = settings.walk_steps
