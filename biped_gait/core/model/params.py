@@ -15,7 +15,7 @@ from importlib import resources
 from pathlib import Path
 
 from .text import clip
-from .yaml_files import parse_yaml, read_yaml_text
+from .yaml_files import parse_package_yaml, parse_yaml, read_yaml_text
 
 DEFAULT_PARAMS = "aoustin2013"
 DEFAULT_FRICTION = 0.5  # Coulomb coefficient of the foot on the floor when a file gives none
@@ -91,7 +91,7 @@ def load_params(name_or_path: str | Path | None = None) -> BipedParams:
 def _shipped_params(name: str) -> BipedParams:
     """A shipped parameter set, read once per process (package data; ``BipedParams`` is immutable)."""
     text = resources.files("biped_gait.core.data").joinpath(f"{name}.yaml").read_text()
-    return params_from_dict(parse_yaml(text, f"parameter file {name}"), name)
+    return params_from_dict(parse_package_yaml(text), name)
 
 
 def _is_file(key: str) -> bool:
