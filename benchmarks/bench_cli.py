@@ -1,7 +1,9 @@
 """Benchmark: the ``biped-gait`` command as a whole process beside the import floor (a Python that
 only imports NumPy, SciPy, Pinocchio and highspy) measured in the same run: ``biped-gait plan``
 (the default gait, from the atlas) and ``--help`` of every verb. The commands are run in turn,
-``--repeat`` rounds, so that a change of load falls on all alike; medians. Run:
+``--repeat`` rounds, so that a change of load falls on all alike; medians. The processes may
+write and use Python's bytecode cache (``PYTHONDONTWRITEBYTECODE`` is left out of their
+environment), as a user's installation does after its first run. Run:
 
     .venv/bin/python benchmarks/bench_cli.py [--repeat N]
 """
@@ -9,6 +11,7 @@ only imports NumPy, SciPy, Pinocchio and highspy) measured in the same run: ``bi
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -17,13 +20,14 @@ from pathlib import Path
 
 from yardsticks import FLOOR_IMPORTS
 
+ENVIRONMENT = {name: value for name, value in os.environ.items() if name != "PYTHONDONTWRITEBYTECODE"}
 VERBS = ("plan", "urdf", "recover", "sweep", "optimize-arms", "figure", "maps", "push-study", "results-page", "atlas")
 
 
 def wall_s(command: list[str]) -> float:
     """Wall time (s) of one run of ``command`` (its output discarded; it must succeed)."""
     start = time.perf_counter()
-    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=ENVIRONMENT)
     return time.perf_counter() - start
 
 
