@@ -24,17 +24,12 @@ from biped_gait.core.dynamics.impulses import solve_l1
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.gait.figures import energy_drift, step_figures
 from biped_gait.core.dynamics.samples import NativeSamples, SampleEvaluator
-from yardsticks import ColdSolve
+from yardsticks import ColdSolve, median_s
 
 
 def median_ms(call, repeat: int) -> float:
     """Median wall time (ms) of ``call()`` over ``repeat`` calls."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return 1e3 * statistics.median(times)
+    return 1e3 * median_s(call, repeat)
 
 
 def main() -> None:

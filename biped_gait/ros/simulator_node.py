@@ -69,7 +69,8 @@ from ..core.dynamics.settings import DEFAULTS
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, SPEED_RULES
-from ..core.walking.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
+from ..core.walking.walk import (CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk,
+                                  prepare_walking)
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
@@ -143,6 +144,7 @@ class SimulatorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
         self.value = value = declare(self, PARAMETERS)
+        prepare_walking()  # what the walk loads once, now rather than when it starts
         self.pushes = PushScheduler(parse_pushes(value["pushes"]))
         self.source = value["plan_source"]
         self.rate = value["publish_rate"]

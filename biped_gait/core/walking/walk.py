@@ -184,6 +184,14 @@ class WalkState:
     stance_foot: np.ndarray = field(default_factory=lambda: np.array([0.0, -0.2, 0.0]))
 
 
+def prepare_walking() -> None:
+    """Load what walking needs once and a plan does not: SciPy's root finder, which the touchdown
+    guard imports on first use (``hybrid._root``; a few tenths of a second). Called when a
+    ``Walker`` is made, and by a process that walks at start-up (the simulator node), so that
+    its first walk starts at once."""
+    import scipy.optimize  # noqa: F401
+
+
 class Walker:
     """Walks the gait of ``orbit`` with the dynamics of ``hybrid`` one step per ``walk_step``."""
 
@@ -198,7 +206,7 @@ class Walker:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if momentum_rate is not None and not reaim:
             raise ValueError("steering the momentum is part of the re-aim: it needs reaim")
-        import scipy.optimize  # noqa: F401  the touchdown guard's root finder (hybrid._root): loaded now, not at a touchdown
+        prepare_walking()
         self.hybrid, self.bm, self.rate = hybrid, hybrid.bm, rate
         self.settings = settings
         self.grid = settings.walk_steps
