@@ -35,7 +35,7 @@ from std_srvs.srv import Trigger  # noqa: E402
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.ros.client import ClientSide  # noqa: E402
-from biped_gait.ros.conversions import plan_msg  # noqa: E402
+from biped_gait.ros.conversions import plan_msg, urdf_joints  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 from biped_gait.ros.planner_node import without_trajectory  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
@@ -197,7 +197,7 @@ def main() -> None:
         start = time.perf_counter()
         planner.plan(GaitRequest(0.45, 0.45, 0.30 + 1e-4 * k, "normal"))
         solves.append(time.perf_counter() - start)
-    plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header())
+    plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header(), urdf_joints(planner.model))
     conversions = {"whole": conversion_ms(PlanGait.Response(success=True, message="admissible", plan=plan)),
                    "without trajectory": conversion_ms(PlanGait.Response(success=True, message="admissible",
                                                                          plan=without_trajectory(plan)))}

@@ -35,7 +35,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.core.dynamics.samples import NativeSamples  # noqa: E402
-from biped_gait.core.model.urdf import PHYSICAL_JOINTS  # noqa: E402
+from biped_gait.core.model.params import load_params  # noqa: E402
 from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
 from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
@@ -65,7 +65,7 @@ def core_factors(planner: GaitPlanner, steps: int) -> tuple[float, float]:
         walker.walk_step()
     walker_rtf = walker.state.t / (time.perf_counter() - start)
     walk = Walk(orbit, RATE, steps)
-    messages = SampleMessages(walk.world.link_frames)
+    messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
     start, simulated = time.perf_counter(), 0.0
     for item in walk.batches():
         if isinstance(item, StepSamples):
@@ -81,7 +81,8 @@ def message_costs(tmp: Path) -> dict[str, float]:
     rclpy.init()
     node = rclpy.create_node("bench_messages")
     publisher = node.create_publisher(JointState, "/bench_joint_states", 50)
-    build = lambda: JointState(name=list(PHYSICAL_JOINTS), position=[0.1] * 7, velocity=[0.2] * 7,  # noqa: E731
+    names = list(load_params().joints.physical_names())
+    build = lambda: JointState(name=names, position=[0.1] * 7, velocity=[0.2] * 7,  # noqa: E731
                                effort=[0.0] * 7)
     msg = build()
     data = serialize_message(msg)
@@ -93,7 +94,7 @@ def message_costs(tmp: Path) -> dict[str, float]:
     planner = GaitPlanner()
     walk = Walk(PlannedOrbit.of(planner.plan(REQUEST)), RATE, 1)
     step = next(item for item in walk.batches() if isinstance(item, StepSamples))
-    messages = SampleMessages(walk.world.link_frames)
+    messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
     stamps = (step.t * 1e9).astype(np.int64)
     costs = {
         "JointState built": per_call_us(build),

@@ -167,6 +167,12 @@ def _parser() -> argparse.ArgumentParser:
     plan.add_argument("--effort-coordinates", default="joint", choices=("joint", "absolute"),
                       help="the effort's reading: on joint angles (default, the paper's eq. 12) or on the links' "
                       "absolute angles")
+    plan.add_argument("--step-width", type=float, metavar="M",
+                      help="distance between the feet (m), default the hips' spacing (0.40 m with the shipped sets); "
+                      "another width needs hip roll and yaw joints (--params aoustin2013-hips)")
+    plan.add_argument("--turn-radius", type=float, default=math.inf, metavar="M",
+                      help="walk on a circle of this radius (m; positive turns left, negative right; default inf: "
+                      "straight): a stride of two steps; needs hip roll and yaw joints (--params aoustin2013-hips)")
     plan.add_argument("--json", type=Path, help="write the full result (SI, radians) to this JSON file ('-': "
                       "standard output, the summary then goes to standard error)")
     urdf = sub.add_parser("urdf", help="print (or write) the URDF of the biped")
@@ -362,8 +368,15 @@ def main(argv: list[str] | None = None) -> int:
             friction=args.friction,
             rate_bound=args.rate_bound,
             effort_coordinates=args.effort_coordinates,
+            step_width=args.step_width,
+            turn_radius=args.turn_radius,
         )
-        result = planner.plan(request)
+        if math.isfinite(args.turn_radius):
+            result = planner.plan_stride(request)
+            summary, to_json = views.stride_summary(result), views.stride_to_json
+        else:
+            result = planner.plan(request)
+            summary, to_json = views.summary(result), views.to_json
     except ValueError as exc:
         print(f"biped-gait: error: {exc}", file=sys.stderr)
         return 2
@@ -373,13 +386,13 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # a write at the end failed (disk full, folder removed meanwhile)
         print(f"biped-gait: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 1
-    print(views.summary(result), file=sys.stderr if to_stdout else sys.stdout)
+    print(summary, file=sys.stderr if to_stdout else sys.stdout)
     try:
         if to_stdout:
-            sys.stdout.write(views.to_json(result) + "\n")
+            sys.stdout.write(to_json(result) + "\n")
         elif args.json:
             args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(views.to_json(result))
+            args.json.write_text(to_json(result))
             print(f"result written to {args.json}")
     except OSError as exc:
         print(f"biped-gait: error: cannot write {args.json}: {exc.strerror or exc}", file=sys.stderr)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-from biped_gait.core.dynamics.impulses import ImpactProblem
+from biped_gait.core.dynamics.impulses import ImpactLayout, ImpactProblem
 
 DEFAULT_REQUEST = GaitRequest(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5), mode="normal")
 
@@ -39,4 +39,5 @@ def impact_problem(planner: GaitPlanner, gait) -> ImpactProblem:
     tip = bm.swing_tip(q_t)
     z_d = np.zeros(12)
     z_d[3:5] = tip[:2] / np.linalg.norm(tip)  # the locked rotation about the foot-to-foot line
-    return ImpactProblem(bm.mass_matrix(q_t), j1, j2, gait.double_support.xd_b, gait.double_support.xd_a, z_d)
+    return ImpactProblem(bm.mass_matrix(q_t), j1, j2, gait.double_support.xd_b, gait.double_support.xd_a, z_d,
+                         ImpactLayout.of(bm))

@@ -35,7 +35,7 @@ def test_a_step_of_messages_decodes_to_the_messages_built_field_by_field(step):
     walk, batch = step
     world = batch.world
     stamps = 1_800_000_000_123_456_789 + np.arange(len(world)) * 2_000_000
-    rows = SampleMessages(walk.world.link_frames).encode(world, stamps, 1, "left")
+    rows = SampleMessages(walk.world.joints.names, walk.world.link_frames).encode(world, stamps, 1, "left")
     store = get_typestore(Stores.ROS2_JAZZY)
     momentum = "biped_gait_interfaces/msg/AngularMomentum"
     store.register(get_types_from_msg(schema_text(momentum).split(SEPARATOR)[0], momentum))
@@ -44,7 +44,8 @@ def test_a_step_of_messages_decodes_to_the_messages_built_field_by_field(step):
         pelvis = [*world.pelvis_position[k], *world.pelvis_quaternion[k]]
         links = np.concatenate([world.link_translations[k], world.link_quaternions[k]], axis=1).ravel()
         expected = {
-            topics.JOINT_STATES: joint_state_msg(np.concatenate([world.joint_positions[k], world.joint_velocities[k]]), ints),
+            topics.JOINT_STATES: joint_state_msg(world.joint_names, np.concatenate([world.joint_positions[k],
+                                                                            world.joint_velocities[k]]), ints),
             topics.ODOM: odometry_msg(np.array([*pelvis, *world.pelvis_linear_velocity[k],
                                                 *world.pelvis_angular_velocity[k]]), ints),
             topics.ANGULAR_MOMENTUM: momentum_msg(np.concatenate([world.stance_foot, world.momentum_about_foot[k], world.com[k],

@@ -18,12 +18,11 @@ from std_msgs.msg import Header  # noqa: E402
 
 from biped_gait.core.gait.configurations import GaitMode  # noqa: E402
 from biped_gait.core.gait.views import FIELDS  # noqa: E402
-from biped_gait.core.model.biped import JOINT_NAMES  # noqa: E402
 from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
-from biped_gait.core.model.urdf import PHYSICAL_JOINTS, physical_joint_array  # noqa: E402
 from biped_gait.core.walking.walk import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
-from biped_gait.ros.conversions import mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key  # noqa: E402
+from biped_gait.ros.conversions import (  # noqa: E402
+    mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key, urdf_joints)
 
 pytestmark = pytest.mark.ros
 
@@ -34,37 +33,40 @@ def _as_list(value) -> list:
     return list(np.atleast_1d(np.asarray(value, dtype=float)))
 
 
-def test_every_message_field_of_the_field_list_carries_the_core_value(default_gait):
-    msg = deserialize_message(serialize_message(plan_msg(default_gait, Header(frame_id="stance_foot"))), GaitPlan)
+def test_every_message_field_of_the_field_list_carries_the_core_value(planner, default_gait):
+    joints = urdf_joints(planner.model)
+    msg = deserialize_message(serialize_message(plan_msg(default_gait, Header(frame_id="stance_foot"), joints)),
+                              GaitPlan)
     checked = 0
     for field in FIELDS:
         if field.msg is None:
             continue
         value = field.read(default_gait)
         got = getattr(msg, field.msg)
-        if isinstance(value, str):
-            assert got == value, field.key
+        if isinstance(value, str) or (isinstance(value, list) and value and isinstance(value[0], str)):
+            assert list(got) == value if isinstance(value, list) else got == value, field.key
         else:
             assert np.allclose(_as_list(got), _as_list(value), rtol=0, atol=0), field.key
         checked += 1
     # every GaitPlan field but the header, the mode code, the reasons and the trajectory with its joint mapping
-    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs"}
+    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs", "stride_effort"}
     assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons"} - trajectory)
     assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
     assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)
-    assert list(msg.trajectory.joint_names) == list(PHYSICAL_JOINTS) and msg.trajectory_stance_side == "right"
+    assert list(msg.trajectory.joint_names) == list(joints.names) and msg.trajectory_stance_side == "right"
     point = msg.trajectory.points[-1]
-    assert np.allclose(point.positions, physical_joint_array(default_gait.figures.samples.q[-1]), atol=0)
-    assert np.allclose(point.accelerations, physical_joint_array(default_gait.figures.samples.qdd[-1]), atol=0)
+    assert np.allclose(point.positions, joints.array(default_gait.figures.samples.q[-1]), atol=0)
+    assert np.allclose(point.accelerations, joints.array(default_gait.figures.samples.qdd[-1]), atol=0)
     assert list(point.effort) == [0.0] * 7  # ballistic: no joint torque
+    assert list(msg.joint_names) == list(planner.model.names) and len(msg.i_minus) == len(msg.actuated_joints) == 7
     # the stated mapping: URDF angle = sign * the model coordinate it is in this step
     q = default_gait.figures.samples.q[-1]
     for name, sign, angle in zip(msg.joint_roles, msg.joint_signs, point.positions):
-        assert angle == sign * q[JOINT_NAMES.index(name)], name
+        assert angle == sign * q[list(msg.joint_names).index(name)], name
 
 
-def test_the_orbit_a_walk_needs_survives_the_message(default_gait):
-    orbit = orbit_from_msg(plan_msg(default_gait, Header()))
+def test_the_orbit_a_walk_needs_survives_the_message(planner, default_gait):
+    orbit = orbit_from_msg(plan_msg(default_gait, Header(), urdf_joints(planner.model)))
     expected = PlannedOrbit.of(default_gait)
     for name in ("q0", "q_t", "qd_a", "qd_b"):
         assert np.array_equal(getattr(orbit, name), getattr(expected, name)), name
@@ -74,9 +76,9 @@ def test_the_orbit_a_walk_needs_survives_the_message(default_gait):
 
 def test_a_failed_solve_becomes_nan_and_its_reasons(planner):
     failed = planner.plan(GaitRequest(0.45, 5.0, 0.4))
-    msg = plan_msg(failed, Header())
+    msg = plan_msg(failed, Header(), urdf_joints(planner.model))
     assert not msg.converged and list(msg.reasons) == list(failed.reasons) and msg.reasons
-    assert math.isnan(msg.effort_cost) and all(math.isnan(v) for v in msg.i_minus) and math.isnan(msg.ir2.z)
+    assert math.isnan(msg.effort_cost) and list(msg.i_minus) == [] and math.isnan(msg.ir2.z)
     assert msg.trajectory.points == []
     assert not orbit_from_msg(msg).converged
 
@@ -85,7 +87,8 @@ def test_requests_take_the_defaults_and_unknown_modes_are_refused():
     req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL)
     core = request_from_msg(req, "aoustin2013")
     assert core == GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013", "theta", "l1")
-    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1", None, math.inf, "joint")
+    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1", None, math.inf, "joint",
+                                 None, math.inf)
     with pytest.raises(ValueError, match="unknown gait mode 7"):
         request_from_msg(PlanGait.Request(mode=7), "aoustin2013")
 

@@ -25,7 +25,7 @@ pytestmark = pytest.mark.core
 def test_the_friction_cone_holds_on_every_reaction_impulse(planner, mode, mu):
     gait = planner.plan(dataclasses.replace(DEFAULT_REQUEST, mode=mode, friction=mu))
     assert gait.converged and gait.double_support.impulses.success
-    ratios = friction_ratios(gait.double_support.impulses.x)
+    ratios = friction_ratios(gait.double_support.impulses)
     assert np.all(ratios <= mu + 1e-9), ratios
     assert np.array_equal(ratios, gait.double_support.impulse_friction_ratios)
     free = planner.plan(dataclasses.replace(DEFAULT_REQUEST, mode=mode, friction=math.inf))

@@ -13,11 +13,10 @@ from scipy.optimize import linprog
 
 from biped_gait.core.gait import views
 from biped_gait.core.gait.configurations import GaitMode
-from biped_gait.core.dynamics.hybrid import P_INVERSE, P_MATRIX
 from biped_gait.core.gait.bvp import solve_bvp
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-from biped_gait.core.dynamics.impulses import I_MINUS, I_PLUS, solve_impulses
+from biped_gait.core.dynamics.impulses import solve_impulses
 from biped_gait.core.gait.figures import ground_reaction_momentum
 from biped_gait.core.dynamics.samples import ground_reaction_inverse_dynamics
 
@@ -73,7 +72,8 @@ def test_lp_optimum_is_certified_two_ways(planner, paper_lp_gait):
     keep = np.arange(42) != int(np.argmax(np.abs(problem.left_null_vector())))
     # The LP in the form W = sum(p + m), I = p - m, p, m >= 0: another formulation, another algorithm.
     n = 47
-    idx = np.r_[np.arange(I_MINUS.start, I_MINUS.stop), np.arange(I_PLUS.start, I_PLUS.stop)]
+    lay = problem.layout
+    idx = np.r_[np.arange(lay.i_minus.start, lay.i_minus.stop), np.arange(lay.i_plus.start, lay.i_plus.stop)]
     k = idx.size
     a_eq = np.hstack([a[keep], np.zeros((41, 2 * k))])
     a_eq[:, idx] = 0.0
@@ -132,10 +132,11 @@ def test_gait_is_periodic_through_the_leg_exchange(planner, default_gait):
     assert np.allclose(xd_plus, sol.xd_plus, atol=1e-9)
     assert np.allclose(xd_a, default_gait.double_support.xd_a, atol=1e-9)
     # In the next step's coordinates the state is again (q(0), qd(0)): an exact periodic orbit.
-    assert np.allclose(P_MATRIX @ np.array(default_gait.step.q_target), default_gait.step.q0, atol=1e-14)
-    assert np.allclose(P_MATRIX @ xd_a[3:], default_gait.qd_a, atol=1e-9)
+    p = planner.hybrid.exchange.matrix
+    assert np.allclose(p @ np.array(default_gait.step.q_target), default_gait.step.q0, atol=1e-14)
+    assert np.allclose(p @ xd_a[3:], default_gait.qd_a, atol=1e-9)
     # Two steps walked with the flow return to the same state (step 2 starts from the map).
-    run = planner.flow.propagate(P_MATRIX @ np.array(default_gait.step.q_target), P_MATRIX @ xd_a[3:], default_gait.period)
+    run = planner.flow.propagate(p @ np.array(default_gait.step.q_target), p @ xd_a[3:], default_gait.period)
     assert np.allclose(run.q, default_gait.step.q_target, atol=1e-9)
     assert np.allclose(run.qd, default_gait.step.qd_b, atol=1e-8)
 
@@ -238,5 +239,6 @@ def test_bad_requests_are_refused(planner, change, message):
         planner.plan(dataclasses.replace(DEFAULT_REQUEST, **change))
 
 
-def test_p_inverse_is_the_inverse():
-    assert np.allclose(P_MATRIX @ P_INVERSE, np.eye(9), atol=1e-15)
+def test_p_inverse_is_the_inverse(planner):
+    exchange = planner.hybrid.exchange
+    assert np.allclose(exchange.matrix @ exchange.inverse, np.eye(9), atol=1e-15)

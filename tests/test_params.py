@@ -28,7 +28,20 @@ def test_default_set_corrects_only_the_arm_inertia():
     assert table.arm.inertia == (0.7414, 0.7414, 0.0)
     for link in ("shin", "thigh", "trunk"):
         assert getattr(default, link) == getattr(table, link)
-    assert shipped_param_names() == ["aoustin2013", "aoustin2013-table"]
+    assert shipped_param_names() == ["aoustin2013", "aoustin2013-hips", "aoustin2013-table"]
+
+
+def test_the_hips_set_is_the_default_with_hip_joints():
+    """aoustin2013-hips: the default's links and geometry, the legs given an axial inertia, and a
+    yaw, a roll and a pitch joint in each hip."""
+    default, hips = load_params("aoustin2013"), load_params("aoustin2013-hips")
+    assert hips.trunk == default.trunk and hips.arm == default.arm and hips.hip_half_width == default.hip_half_width
+    for link in ("shin", "thigh"):
+        a, b = getattr(default, link), getattr(hips, link)
+        assert (a.length, a.mass, a.com_offset, a.inertia[:2]) == (b.length, b.mass, b.com_offset, b.inertia[:2])
+        assert a.inertia[2] == 0.0 < b.inertia[2]
+    assert hips.joints.hip_roles == ("hip_yaw", "hip_roll", "hip_pitch") and hips.joints.lateral_hips
+    assert default.joints.hip_roles == ("hip_pitch",) and not default.joints.lateral_hips
 
 
 def _edited(tmp_path, edit) -> str:
@@ -55,6 +68,16 @@ def test_a_copied_file_loads(tmp_path):
         (lambda raw: raw["links"]["arm"].update(length=float("nan")), "must be finite"),
         (lambda raw: raw["geometry"].update(hip_half_width=0.0), "must be positive"),
         (lambda raw: raw["links"]["shin"].update(com_offset=0.6), "com_offset must lie in"),
+        (lambda raw: raw["joints"][2].update(role="hip_twist"), "unknown role 'hip_twist'"),
+        (lambda raw: raw["joints"][3].update(axis="x"), "a knee joint turns about y, not 'x'"),
+        (lambda raw: raw["joints"][4].update(name="{side}_torso"), "the torso's joint has no {side}"),
+        (lambda raw: raw["joints"].pop(5), "no shoulder joint"),
+        (lambda raw: raw["joints"].append(dict(raw["joints"][3])), "role knee appears 2 times"),
+        (lambda raw: raw["joints"][3].update(parent="pelvis"), "must hang on thigh"),
+        (lambda raw: raw["joints"][2].update(upper=-3.0), "lower < upper"),
+        (lambda raw: raw["joints"].insert(3, {"name": "{side}_hip_roll", "role": "hip_roll", "axis": "x",
+                                              "parent": "pelvis", "child": "hip_link"}),
+         "a pitch joint alone, or a pitch, a roll and a yaw joint"),
     ],
 )
 def test_non_physical_files_are_refused(tmp_path, edit, message):

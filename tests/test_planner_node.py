@@ -18,9 +18,8 @@ from mcap_ros2.reader import read_ros2_messages
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
 
-from biped_gait.core.model.biped import JOINT_NAMES
 from biped_gait.core.gait.planner import GaitRequest
-from biped_gait.core.model.urdf import PHYSICAL_JOINTS, physical_joint_array
+from biped_gait.ros.conversions import urdf_joints
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
@@ -69,14 +68,32 @@ def test_service_answer_equals_the_core(ros, planner, default_gait):
     assert np.allclose(plan.qd_a, default_gait.qd_a, atol=1e-12)
     assert plan.converged and plan.admissible
     assert len(plan.trajectory.points) == len(default_gait.figures.samples.t)
-    assert list(plan.trajectory.joint_names) == list(PHYSICAL_JOINTS) and plan.trajectory_stance_side == "right"
+    joints = urdf_joints(planner.model)
+    assert list(plan.trajectory.joint_names) == list(joints.names) and plan.trajectory_stance_side == "right"
     last = plan.trajectory.points[-1]
     assert last.time_from_start.sec + 1e-9 * last.time_from_start.nanosec == pytest.approx(0.45, abs=1e-9)
-    assert np.allclose(last.positions, physical_joint_array(default_gait.step.q_target, "right"), atol=1e-9)
+    assert np.allclose(last.positions, joints.array(default_gait.step.q_target, "right"), atol=1e-9)
     # the stated mapping gives the model's coordinates back
     model = {name: sign * angle for name, sign, angle in zip(plan.joint_roles, plan.joint_signs, last.positions)}
-    assert model["stance_hip"] == pytest.approx(default_gait.step.q_target[JOINT_NAMES.index("stance_hip")], abs=1e-9)
-    assert model["swing_knee"] == pytest.approx(default_gait.step.q_target[JOINT_NAMES.index("swing_knee")], abs=1e-9)
+    names = list(plan.joint_names)
+    assert model["stance_hip"] == pytest.approx(default_gait.step.q_target[names.index("stance_hip")], abs=1e-9)
+    assert model["swing_knee"] == pytest.approx(default_gait.step.q_target[names.index("swing_knee")], abs=1e-9)
+
+
+def test_a_gait_of_the_hips_model_carries_its_joints(ros):
+    """The 13-DOF set over the wire: every vector at its model's size, named; the trajectory lists
+    the URDF's hip joints; a step width outside the model's range is refused, the node serving on."""
+    response = ros.call(ros.client, plan_request(arm_amplitude=math.radians(20.0), params="aoustin2013-hips",
+                                                 step_width=0.35))
+    assert response.success, response.message
+    plan = response.plan
+    assert len(plan.joint_names) == len(plan.q0) == len(plan.qd_a) == 13 and plan.step_width == 0.35
+    assert len(plan.actuated_joints) == len(plan.i_minus) == len(plan.i_plus) == 11
+    assert len(plan.double_support_coordinates) == len(plan.xd_a) == 17 and len(plan.reaction_spin_impulses) == 3
+    assert "right_hip_roll" in plan.trajectory.joint_names and len(plan.trajectory.points[0].positions) == 11
+    refused = ros.call(ros.client, plan_request(params="aoustin2013-hips", step_width=0.9))
+    assert not refused.success and "step width must be in" in refused.message
+    assert ros.call(ros.client, plan_request()).success
 
 
 BAD_REQUESTS = [

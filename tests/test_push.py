@@ -10,8 +10,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from biped_gait.core.gait.configurations import THETA_DIRECTION
-from biped_gait.core.dynamics.hybrid import MIRROR, exchange
+from biped_gait.core.gait.configurations import boundary_configurations
+from biped_gait.core.model.exchange import MIRROR, world_axes
 from biped_gait.core.model.biped import cross
 from biped_gait.core.walking.push import DIRECTIONS, Push, TrunkPush, horizontal_impulse
 from biped_gait.core.gait.stability import closed_loop
@@ -39,7 +39,7 @@ def test_the_velocity_jump_carries_the_impulses_moment(planner, default_gait, si
     bm = planner.model
     q, qd = default_gait.step.q0, default_gait.step.qd_a
     impulse = np.array([3.0, -2.0, 0.5])
-    jump = TrunkPush(bm).velocity_jump(q, impulse, side)
+    jump = TrunkPush(bm).velocity_jump(q, impulse, world_axes(side))
     _, before, _ = bm.momentum(q, np.concatenate([np.zeros(3), qd]))
     _, after, _ = bm.momentum(q, np.concatenate([np.zeros(3), qd + jump]))
     trunk = TrunkPush(bm)
@@ -62,10 +62,10 @@ def test_a_push_splits_the_step_where_it_acts(planner, default_gait):
     assert applied.time_in_step == pytest.approx(0.2, abs=1e-12) and applied.step == 0
     fine = planner.hybrid.flow(64)
     mid = fine.propagate(default_gait.step.q0, default_gait.step.qd_a, 0.2)
-    jump = TrunkPush(planner.model).velocity_jump(mid.q, push.impulse, "right")
+    jump = TrunkPush(planner.model).velocity_jump(mid.q, push.impulse, world_axes("right"))
     assert np.allclose(jump, applied.delta_qd, atol=1e-12)
     end = fine.propagate(mid.q, mid.qd + jump, outcome.touchdown.t_step - 0.2)
-    assert np.allclose(exchange(walker.state.q), end.q, atol=1e-9)
+    assert np.allclose(planner.hybrid.exchange.configuration(walker.state.q), end.q, atol=1e-9)
     times = np.array([s.t_step for s in outcome.samples])
     velocities = np.array([s.qd for s in outcome.samples])
     k = int(np.searchsorted(times, 0.2))  # the first sample at or after the push
@@ -120,13 +120,13 @@ def test_steering_gains_are_the_plain_reaims_linearization(planner, default_gait
     walker = Walker(hybrid, PlannedOrbit.of(gait), rate=1.0)
 
     def next_momentum(d_theta: float, d_momentum: float) -> float:
-        q_pre = gait.step.q_target + d_theta * THETA_DIRECTION
+        q_pre = gait.step.q_target + d_theta * boundary_configurations(hybrid.bm).theta_direction
         impact = hybrid.impact(q_pre)
         row = impact.momentum_row[3:]
         shift = ref.momentum + d_momentum - row @ gait.step.qd_b  # the momentum held at M_p + d_momentum
         xd_b = np.concatenate([np.zeros(3), gait.step.qd_b + shift * row / (row @ row)])
-        v = walker._reaim(exchange(q_pre), impact, xd_b)
-        end = hybrid.flow(32).propagate(exchange(q_pre), v, walker.next_period)
+        v = walker._reaim(hybrid.exchange.configuration(q_pre), impact, xd_b)
+        end = hybrid.flow(32).propagate(hybrid.exchange.configuration(q_pre), v, walker.next_period)
         return float(momentum_row(hybrid, end.q) @ end.qd)
 
     h = 1e-6
@@ -134,7 +134,7 @@ def test_steering_gains_are_the_plain_reaims_linearization(planner, default_gait
     b = (next_momentum(0, h) - next_momentum(0, -h)) / (2 * h)
     print(f"\na = {ref.a:.6f} (differences {a:.6f}), b = {ref.b:.6f} (differences {b:.6f})")
     assert ref.a == pytest.approx(a, rel=1e-5) and ref.b == pytest.approx(b, rel=1e-5)
-    assert pelvis_pitch(gait.step.q_target) == pytest.approx(gait.theta, abs=1e-12)
+    assert pelvis_pitch(planner.model, gait.step.q_target) == pytest.approx(gait.theta, abs=1e-12)
 
 
 def test_the_steered_walk_lands_on_the_plan(planner, default_gait):

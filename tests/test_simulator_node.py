@@ -8,6 +8,7 @@ import pytest
 
 pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
 
+import math
 import signal
 import subprocess
 import time
@@ -20,11 +21,13 @@ from sensor_msgs.msg import JointState
 
 from biped_gait.cli import main as cli_main
 from biped_gait.recording.recover import is_complete
-from biped_gait.core.model.urdf import PHYSICAL_JOINTS
+from biped_gait.core.model.params import load_params
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
 from .ros_helpers import read_bag, planner_process, start_simulator, stop_node
+
+PHYSICAL_JOINTS = load_params().joints.physical_names()  # the default set's URDF joints
 
 pytestmark = pytest.mark.ros
 
@@ -188,3 +191,24 @@ def test_a_fall_is_detected_and_reported(planner_node, tmp_path):
     assert events[-1].kind == GaitEvent.FALL and events[-1].message
     touchdowns = [e for e in events if e.kind == GaitEvent.TOUCHDOWN]
     assert len(touchdowns) < 20 and all(e.step < events[-1].step for e in touchdowns)
+
+
+def test_the_hips_model_walks_and_publishes_its_hip_joints(planner_node, tmp_path):
+    """aoustin2013-hips through the nodes: the planner's 13-DOF gait walked 3 steps; /joint_states
+    and /tf carry the hips' joints, the events the eleven impulses with their joints' names."""
+    proc = simulator(tmp_path, "steps:=3", "real_time_factor:=0.0", "exit_when_done:=true",
+                     "params:=aoustin2013-hips", f"arm_amplitude:={math.radians(20.0)}")
+    assert proc.wait(timeout=300) == 0, (tmp_path / "biped-gait-simulator.log").read_text()
+    [bag] = list((tmp_path / "bags").iterdir())
+    topics = read_bag(bag)
+    names = list(load_params("aoustin2013-hips").joints.physical_names())
+    joint = topics["/joint_states"][50][1]
+    assert list(joint.name) == names and len(joint.position) == 11
+    touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
+    assert len(touchdowns) == 3 and max(e.state_error for e in touchdowns) < 1e-9
+    assert len(touchdowns[0].i_minus) == len(touchdowns[0].joint_names) == 11
+    assert "stance_hip_roll" in touchdowns[0].joint_names
+    frames = {t.child_frame_id for t in topics["/tf"][50][1].transforms}
+    assert {"right_hip_yaw_link", "right_hip_roll_link", "left_thigh"} <= frames
+    rolls = np.array([m.position[names.index("left_hip_roll")] for _, m in topics["/joint_states"]])
+    assert np.abs(rolls).max() > math.radians(3.0)  # the hips move

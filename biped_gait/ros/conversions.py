@@ -16,11 +16,12 @@ from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.gait.configurations import GaitMode
-from ..core.gait.gait import Gait
+from ..core.gait.gait import Gait, Stride
 from ..core.gait.views import FIELDS
 from ..core.dynamics.impulses import EffortOptions
 from ..core.gait.planner import GaitRequest
-from ..core.model.urdf import PHYSICAL_JOINTS, joint_roles, physical_joint_array
+from ..core.model.biped import BipedModel
+from ..core.model.urdf import UrdfJoints
 from ..core.walking.walk import PlannedOrbit
 from ..recording.topics import MODE_CODES
 
@@ -38,7 +39,8 @@ def mode_from_msg(code: int) -> GaitMode:
 
 def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
     """The core's GaitRequest for a service request (empty strings and zeros take the defaults:
-    the parameter set's friction, no joint-rate bound, the joint reading of the effort)."""
+    the parameter set's friction, no joint-rate bound, the joint reading of the effort, the hips'
+    spacing as the step width (also for NaN))."""
     return GaitRequest(
         step_length=req.step_length,
         period=req.period,
@@ -50,13 +52,16 @@ def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
         friction=req.friction or None,
         rate_bound=req.rate_bound or math.inf,
         effort_coordinates=req.effort_coordinates or "joint",
+        step_width=None if req.step_width == 0 or math.isnan(req.step_width) else req.step_width,
+        turn_radius=math.inf if req.turn_radius == 0 or math.isnan(req.turn_radius) else req.turn_radius,
     )
 
 
 def request_key(request: GaitRequest) -> tuple:
     """Hashable identity of a request, for the planner's cache."""
     return (request.step_length, request.period, request.arm_amplitude, request.mode.value, request.params,
-            request.closure, request.effort, request.friction, request.rate_bound, request.effort_coordinates)
+            request.closure, request.effort, request.friction, request.rate_bound, request.effort_coordinates,
+            request.step_width, request.turn_radius)
 
 
 def duration_msg(seconds: float) -> Duration:
@@ -65,16 +70,16 @@ def duration_msg(seconds: float) -> Duration:
     return Duration(sec=nanos // 1_000_000_000, nanosec=nanos % 1_000_000_000)
 
 
-def trajectory_msg(gait: Gait) -> JointTrajectory:
-    """The ballistic step as a JointTrajectory of the URDF's joints with the right foot (the
-    model's leg 1) in stance (no header stamp): positions (rad), velocities (rad/s),
+def trajectory_msg(gait: Gait, joints: UrdfJoints) -> JointTrajectory:
+    """The ballistic step as a JointTrajectory of the URDF's joints (``joints``) with the right
+    foot (the model's leg 1) in stance (no header stamp): positions (rad), velocities (rad/s),
     accelerations (rad/s^2) in the URDF's convention, and efforts (N m) zero, as no joint torque
     acts in the ballistic single support."""
-    traj = JointTrajectory(joint_names=list(PHYSICAL_JOINTS))
+    traj = JointTrajectory(joint_names=list(joints.names))
     samples = gait.figures.samples if gait.figures is not None else None
     if samples is not None:
-        zero = [0.0] * len(PHYSICAL_JOINTS)
-        q, qd, qdd = (physical_joint_array(a, PLAN_STANCE_SIDE) for a in (samples.q, samples.qd, samples.qdd))
+        zero = [0.0] * len(joints.names)
+        q, qd, qdd = (joints.array(a, PLAN_STANCE_SIDE) for a in (samples.q, samples.qd, samples.qdd))
         for k, t in enumerate(samples.t):
             traj.points.append(JointTrajectoryPoint(positions=q[k].tolist(), velocities=qd[k].tolist(),
                                                     accelerations=qdd[k].tolist(), effort=zero,
@@ -87,11 +92,17 @@ def _fixed(values, size: int) -> list[float]:
     return [float(v) for v in values] if len(values) == size else [math.nan] * size
 
 
-def plan_msg(gait: Gait, header) -> GaitPlan:
-    """GaitPlan message of a core gait, stamped with ``header``."""
-    roles = joint_roles(PLAN_STANCE_SIDE)
+def urdf_joints(bm: BipedModel) -> UrdfJoints:
+    """The URDF's moving joints of ``bm`` and where they come from in its coordinates."""
+    return UrdfJoints(bm.params.joints, bm.coordinates)
+
+
+def plan_msg(gait: Gait, header, joints: UrdfJoints) -> GaitPlan:
+    """GaitPlan message of a core gait, stamped with ``header``; ``joints``: its model's URDF
+    joints (``urdf_joints``)."""
+    roles = joints.roles(PLAN_STANCE_SIDE)
     msg = GaitPlan(header=header, mode=MODE_TO_MSG[gait.mode], reasons=list(gait.reasons),
-                   trajectory=trajectory_msg(gait), trajectory_stance_side=PLAN_STANCE_SIDE,
+                   trajectory=trajectory_msg(gait, joints), trajectory_stance_side=PLAN_STANCE_SIDE,
                    joint_roles=[name for name, _ in roles], joint_signs=[sign for _, sign in roles])
     for f in FIELDS:
         if f.msg is None:
@@ -102,11 +113,21 @@ def plan_msg(gait: Gait, header) -> GaitPlan:
             value = Vector3(x=x, y=y, z=z)
         elif f.size is not None:
             value = _fixed(value, f.size)
-        elif isinstance(value, np.ndarray):
+        elif f.array or isinstance(value, np.ndarray):
             value = [float(v) for v in value]
         setattr(msg, f.msg, value)
     msg.trajectory.header = header
+    msg.stride_effort = gait.W
     return msg
+
+
+def stride_msgs(stride: Stride, header, joints: UrdfJoints) -> tuple[GaitPlan, list[GaitPlan]]:
+    """The GaitPlan messages of a stride's steps: the first (A, right foot) and the others (B),
+    each with the stride's effort."""
+    plans = [plan_msg(step, header, joints) for step in stride.steps]
+    for plan in plans:
+        plan.stride_effort = stride.W
+    return plans[0], plans[1:]
 
 
 def orbit_from_msg(msg: GaitPlan) -> PlannedOrbit:

@@ -51,7 +51,7 @@ from ..core.model.text import clip
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
-from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key
+from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key, stride_msgs, urdf_joints
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
@@ -86,6 +86,8 @@ class CachedAnswer:
     message: str
     plan: GaitPlan
     compact: GaitPlan
+    next_steps: tuple[GaitPlan, ...] = ()
+    next_compact: tuple[GaitPlan, ...] = ()
 
 
 def without_trajectory(plan: GaitPlan) -> GaitPlan:
@@ -233,18 +235,27 @@ class GaitPlannerNode(Node):
         if cached is not None:
             response.success = cached.success
             response.plan = cached.compact if request.omit_trajectory else cached.plan
+            response.next_steps = list(cached.next_compact if request.omit_trajectory else cached.next_steps)
             response.message = f"{cached.message} (cached)"
             return
-        gait = self._planner(core_request.params, "service").plan(core_request)
-        plan = plan_msg(gait, self._header())
+        planner = self._planner(core_request.params, "service")
+        joints = urdf_joints(planner.model)
+        if math.isfinite(core_request.turn_radius):
+            gait = planner.plan_stride(core_request)
+            plan, next_steps = stride_msgs(gait, self._header(), joints)
+        else:
+            gait = planner.plan(core_request)
+            plan, next_steps = plan_msg(gait, self._header(), joints), []
         response.success = gait.admissible
         if gait.admissible:
             response.message = f"admissible (found by {gait.found})"
         else:
             reasons = "not admissible: " + "; ".join(gait.reasons)
             response.message = f"{reasons}; {gait.hint}" if gait.hint else reasons
-        answer = CachedAnswer(response.success, response.message, plan, without_trajectory(plan))
+        answer = CachedAnswer(response.success, response.message, plan, without_trajectory(plan), tuple(next_steps),
+                              tuple(without_trajectory(p) for p in next_steps))
         response.plan = answer.compact if request.omit_trajectory else plan
+        response.next_steps = list(answer.next_compact if request.omit_trajectory else answer.next_steps)
         with self._cache_lock:
             self._cache[key] = answer
             while len(self._cache) > self.get_parameter("cache_size").value:
@@ -261,12 +272,12 @@ class GaitPlannerNode(Node):
             self._sequence += 1
             sequence = self._sequence
         stamp = self.get_clock().now()
-        success, message, plan = response.success, response.message, response.plan
+        success, message, plan, next_steps = response.success, response.message, response.plan, response.next_steps
 
         def call() -> PlanGaitCall:
             fields = {name: getattr(request, name) for name in PlanGait.Request.get_fields_and_field_types()}
             return PlanGaitCall(header=Header(stamp=stamp.to_msg(), frame_id=PLAN_FRAME), sequence=sequence,
-                                success=success, message=message, plan=plan, **fields)
+                                success=success, message=message, plan=plan, next_steps=next_steps, **fields)
 
         self._record(lambda: self.call_recorder.record_later(call, stamp.nanoseconds), self.call_recorder.topic)
 

@@ -102,6 +102,8 @@ PARAMETERS = (
     Param("arm_amplitude", math.radians(23.5), "alpha of the requested plan (rad here; the biped-gait command "
           "takes degrees); negative: ask the planner's action for the optimal one", -math.pi / 2, math.pi / 2),
     Param("mode", "normal", "arm swing of the requested plan", choices=tuple(m.value for m in GaitMode)),
+    Param("turn_radius", math.inf, "radius of the circle of the requested plan (m, signed: positive turns left; "
+          "inf: straight): a stride of two steps, which needs hip roll and yaw joints (params aoustin2013-hips)"),
     Param("params", "", "parameter set of the requested plan (a shipped name or a YAML file path); empty: the "
           "planner's. A plan from the wire is walked only with a shipped set or this file"),
     Param("steps", 20, "steps to walk (count); 0: until stopped", 0, 1000000),
@@ -189,6 +191,7 @@ class SimulatorNode(Node):
         self.clock = SimClock(self)
         self.controls = SimControls(self, self._group)
         self._messages: SampleMessages | None = None  # the sampled topics' templates, made with the first walk
+        self._actuated: tuple[str, ...] = ()  # the walked model's actuated joints: the events' impulses
         if self.source == "topic":
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
@@ -259,11 +262,12 @@ class SimulatorNode(Node):
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
         # the walk needs the plan's boundary states, not its sampled trajectory
         request = PlanGait.Request(step_length=value["step_length"], period=value["period"], arm_amplitude=alpha,
-                                   mode=mode, params=value["params"], omit_trajectory=True)
+                                   mode=mode, params=value["params"], turn_radius=value["turn_radius"],
+                                   omit_trajectory=True)
         response = self._call_plan(request)
         if not response.success:
             raise NoPlan(f"the planner refused: {response.message}")
-        return response.plan
+        return [response.plan, *response.next_steps]
 
     def _call_plan(self, request: PlanGait.Request, attempts: int = 5, patience: float = 10.0) -> PlanGait.Response:
         """Call plan_gait, sending again when no answer comes: right after discovery a DDS
@@ -280,12 +284,13 @@ class SimulatorNode(Node):
             self.get_logger().warn(f"no answer from plan_gait in {patience:g} s (attempt {attempt}/{attempts})")
         raise NoPlan(f"no answer from plan_gait after {attempts} attempts")
 
-    def _obtain_plan(self) -> GaitPlan:
+    def _obtain_plan(self) -> list[GaitPlan]:
+        """The steps of the gait to walk: one, or a stride's two (from the service only)."""
         if self.source == "service":
             return self._request_plan()
         topic = self.value["plan_topic"]
         self._wait_until(self._plan_ready.is_set, f"a GaitPlan on {topic}", self.value["wait_timeout"])
-        return self._latest_plan
+        return [self._latest_plan]
 
     def walkable_params(self, name: str) -> str:
         """The parameter set to walk a plan with, from the plan's ``params`` field: a shipped
@@ -318,12 +323,12 @@ class SimulatorNode(Node):
                 self._not_started(self._recording_failure)
                 return
             try:
-                plan = self._obtain_plan()
-                params = self.walkable_params(plan.params)
+                plans = self._obtain_plan()
+                params = self.walkable_params(plans[0].params)
             except NoPlan as exc:
                 self._not_started(f"no plan: {exc}")
             else:
-                self._walk(plan, params)
+                self._walk(plans, params)
         except RecordingError as exc:
             self.failed = True
             self.get_logger().error(f"the walk ended: {exc}")
@@ -346,9 +351,10 @@ class SimulatorNode(Node):
         stamp = stamp_msg(self.get_clock().now().nanoseconds)
         self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp, clip(reason, 1000)))
 
-    def _walk(self, plan: GaitPlan, params: str) -> None:
-        """Walk ``plan``, and again from its start after each reset, until the walk ends (with
-        ``exit_when_done``) or the node stops. Simulated time runs on across resets."""
+    def _walk(self, plans: list[GaitPlan], params: str) -> None:
+        """Walk the gait of ``plans`` (its steps), and again from its start after each reset, until
+        the walk ends (with ``exit_when_done``) or the node stops. Simulated time runs on across
+        resets."""
         wanted = self.value["wait_for_subscribers"]
         try:
             self._wait_until(lambda: self.pub_joints.subscription_count() >= wanted,
@@ -356,12 +362,15 @@ class SimulatorNode(Node):
         except NoPlan as exc:
             self._not_started(str(exc))
             return
-        orbit = replace(orbit_from_msg(plan), params=params)
+        orbit = tuple(replace(orbit_from_msg(plan), params=params) for plan in plans)
         start_ns = self.get_clock().now().nanoseconds
         pacer = Pacer(self.rtf)
+        plan = plans[0]
+        circle = f", on a circle of radius {plan.turn_radius:g} m" if math.isfinite(plan.turn_radius) else ""
         self.get_logger().info(
             f"walking L = {plan.step_length:g} m, T = {plan.period:g} s, alpha = {math.degrees(plan.arm_amplitude):.2f} deg "
-            f"({orbit.mode}), {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor {self.rtf:g}")
+            f"({orbit[0].mode}){circle}, {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor "
+            f"{self.rtf:g}")
         try:
             while True:
                 self.controls.take_reset()
@@ -380,7 +389,7 @@ class SimulatorNode(Node):
         finally:
             self.pushes.stop("the walk ended")
 
-    def _walk_once(self, orbit: PlannedOrbit, start_ns: int, pacer: Pacer) -> bool:
+    def _walk_once(self, orbit: tuple[PlannedOrbit, ...], start_ns: int, pacer: Pacer) -> bool:
         """One walk of ``orbit`` from its start, at simulated time ``iterations / rate`` after
         ``start_ns`` (ns); True if it ended (finished or fell, or could not start), False if
         it was stopped or reset."""
@@ -389,9 +398,11 @@ class SimulatorNode(Node):
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
                     momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step)
         if walk.world is not None and self._messages is None:
-            self._messages = SampleMessages(walk.world.link_frames)
+            self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
+        if walk.model is not None:
+            self._actuated = walk.model.actuated_names
         if walk.walker is not None:
-            self.speed.start(walk.walker, orbit.params or None)
+            self.speed.start(walk.walker, orbit[0].params or None)
             self.pushes.start()
             self.phases.restart()
         pacer.delay(time.monotonic() - held)  # the pacing starts with the walk's first sample
@@ -481,8 +492,8 @@ class SimulatorNode(Node):
     def _event(self, kind: int, step: int, side: str, time_in_step: float, base_ns: int, t: float, message: str,
                touchdown: Touchdown | None = None) -> None:
         stamp_ns = base_ns + round(t * 1e9)
-        self.pub_events.publish(event_msg(kind, step, side, time_in_step, stamp_msg(stamp_ns), message, touchdown),
-                                stamp_ns)
+        self.pub_events.publish(event_msg(kind, step, side, time_in_step, stamp_msg(stamp_ns), message, touchdown,
+                                          self._actuated), stamp_ns)
 
     def close(self) -> None:
         """Stop the walk and finalize the recording (shutdown, SIGINT and SIGTERM included);

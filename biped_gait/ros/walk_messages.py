@@ -21,7 +21,6 @@ from tf2_msgs.msg import TFMessage
 
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from ..core.model.urdf import PHYSICAL_JOINTS
 from ..core.walking.walk import Touchdown
 from ..core.walking.world import BASE_FRAME, WORLD_FRAME, Transform as WorldTransform, WorldPictures
 from ..recording import topics
@@ -57,12 +56,12 @@ def _quaternion(q) -> Quaternion:
     return Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
 
 
-def joint_state_msg(floats: np.ndarray, ints: np.ndarray) -> JointState:
-    """The URDF joints' angles (rad, ``floats[:7]``) and rates (rad/s, ``floats[7:]``), stamped
-    ``ints`` (s, ns); efforts zero (N m): the single support is ballistic, no joint torque acts
-    between the impulses of the double supports."""
-    n = len(PHYSICAL_JOINTS)
-    return JointState(header=Header(stamp=_time(ints)), name=list(PHYSICAL_JOINTS), position=floats[:n],
+def joint_state_msg(names: tuple[str, ...], floats: np.ndarray, ints: np.ndarray) -> JointState:
+    """The URDF joints' (``names``) angles (rad, the first half of ``floats``) and rates (rad/s,
+    the second half), stamped ``ints`` (s, ns); efforts zero (N m): the single support is
+    ballistic, no joint torque acts between the impulses of the double supports."""
+    n = len(names)
+    return JointState(header=Header(stamp=_time(ints)), name=list(names), position=floats[:n],
                       velocity=floats[n:], effort=np.zeros(n))
 
 
@@ -104,11 +103,12 @@ def _moving_tf_msg(frames: tuple[tuple[str, str], ...], floats: np.ndarray, ints
 
 
 class SampleMessages:
-    """The sampled topics of the walk, serialized a step at a time: ``/joint_states``, ``/odom``,
-    ``/angular_momentum`` and ``/tf`` (the pelvis and the URDF's moving joints ``link_frames``)."""
+    """The sampled topics of the walk, serialized a step at a time: ``/joint_states`` (the URDF's
+    moving joints ``joint_names``), ``/odom``, ``/angular_momentum`` and ``/tf`` (the pelvis and the
+    links of the URDF's moving joints ``link_frames``)."""
 
-    def __init__(self, link_frames: tuple[tuple[str, str], ...]) -> None:
-        self.joints = CdrTemplate(joint_state_msg, 2 * len(PHYSICAL_JOINTS), 2)
+    def __init__(self, joint_names: tuple[str, ...], link_frames: tuple[tuple[str, str], ...]) -> None:
+        self.joints = CdrTemplate(partial(joint_state_msg, joint_names), 2 * len(joint_names), 2)
         self.odometry = CdrTemplate(odometry_msg, 13, 2)
         self.momentum = {side: CdrTemplate(partial(momentum_msg, side=side), 12, 3) for side in SIDES}
         self.tf = CdrTemplate(partial(_moving_tf_msg, link_frames), 7 * (len(link_frames) + 1), 2)
@@ -133,11 +133,13 @@ class SampleMessages:
 
 
 def event_msg(kind: int, step: int, side: str, time_in_step: float, stamp: TimeMsg, message: str = "",
-              touchdown: Touchdown | None = None) -> GaitEvent:
-    """A GaitEvent; a touchdown's impulses (N m s), W (N m s) and distance to the plan."""
+              touchdown: Touchdown | None = None, joint_names: tuple[str, ...] = ()) -> GaitEvent:
+    """A GaitEvent; a touchdown's impulses (N m s) on the actuated joints ``joint_names``, W (N m s)
+    and distance to the plan."""
     msg = GaitEvent(header=Header(stamp=stamp, frame_id=WORLD_FRAME), kind=kind, step=step, stance_side=side,
                     time_in_step=time_in_step, message=message)
     if touchdown is not None:
         msg.i_minus, msg.i_plus = touchdown.i_minus.tolist(), touchdown.i_plus.tolist()
+        msg.joint_names = list(joint_names)
         msg.effort_cost, msg.state_error, msg.velocity_miss = touchdown.W, touchdown.state_error, touchdown.velocity_miss
     return msg

@@ -135,7 +135,8 @@ def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: t
         else:  # not reached on the branch: what a cold solve finds there
             cold = planner.plan(GaitRequest(float(grid.step_lengths[index[0]]), float(grid.periods[index[1]]), alpha, mode),
                                 cold=True)
-            human = cold.converged and cold.figures is not None and cold.figures.q9_min >= -KNEE_TOLERANCE
+            knee_lower = params.joints.role("knee").limits.lower
+            human = cold.converged and cold.figures is not None and cold.figures.q9_min >= knee_lower - KNEE_TOLERANCE
             record = node_record(cold, human)
         for name, value in record.items():
             nodes[name][index] = value

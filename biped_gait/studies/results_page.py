@@ -29,6 +29,7 @@ from .maps import WalkingMaps, compute_maps, optimum_figure, ratio_figure, readi
 from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
+from .hips_page import HIPS_PARAMS, hips_lines, hips_study
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
 from .walking_page import ALPHA_STEP as WALK_ALPHA_STEP, Walking, compute_walking, walking_figures, walking_section
 
@@ -54,12 +55,6 @@ def paper_momentum_jump(gait: Gait) -> float:
     """|H(T+) about the new stance foot - H(T-) about the old one| (kg m^2/s): the paper's jump,
     which also counts the change of reference point between the two feet."""
     return abs(gait.double_support.h_t_plus[1] - gait.double_support.h_t_minus[0])
-
-
-def momentum_jump(gait: Gait) -> float:
-    """|H(T+) - H(T-)| about the vertical through the new stance foot (kg m^2/s): what the
-    double support's impulses change in the yaw angular momentum, on one fixed axis."""
-    return abs(gait.double_support.h_t_plus[1] - gait.double_support.h_t_minus[1])
 
 
 def _momenta(gait: Gait) -> dict[str, float]:
@@ -120,7 +115,7 @@ def paper_claims(study: Study) -> list[Claim]:
     efforts = [o.W for o in optima]
     comparisons = list(study.comparisons.items())
     premium = [(case, c.anti_normal.W - c.normal.W) for case, c in comparisons]
-    jumps = [(case, momentum_jump(c.normal.gait), momentum_jump(c.anti_normal)) for case, c in comparisons]
+    jumps = [(case, c.normal.gait.double_support.yaw_momentum_jump, c.anti_normal.double_support.yaw_momentum_jump) for case, c in comparisons]
     case = lambda c: f"L = {c[0]:g}, T = {c[1]:g}"  # noqa: E731
     return [
         Claim(
@@ -177,7 +172,7 @@ def _momentum_table(study: Study) -> list[str]:
         n, a = c.normal.gait, c.anti_normal
         rows.append([f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.normal.alpha):.2f}",
                      f"{n.double_support.h_t_minus[0]:.3f}", f"{a.double_support.h_t_minus[0]:.3f}", f"{n.double_support.h_t_plus[1]:.3f}", f"{a.double_support.h_t_plus[1]:.3f}",
-                     f"{momentum_jump(n):.3f}", f"{momentum_jump(a):.3f}"])
+                     f"{n.double_support.yaw_momentum_jump:.3f}", f"{a.double_support.yaw_momentum_jump:.3f}"])
     return _table(header, rows)
 
 
@@ -373,6 +368,7 @@ class Extensions:
     stability: Sequence[PointStability] = ()
     reviewer: ReviewerChecks | None = None
     walking: Walking | None = None
+    hips: Study | None = None
 
 
 STABILITY_FIGURE = "stability.png"
@@ -407,7 +403,8 @@ def render(
         "",
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-              if not path.startswith(("map-", "walk-")) and path not in (STABILITY_FIGURE, RATE_FIGURE)]
+              if not path.startswith(("map-", "walk-", f"fig4-{HIPS_PARAMS}"))
+              and path not in (STABILITY_FIGURE, RATE_FIGURE)]
     for study in studies:
         label = " (default)" if study is default else ""
         lines += ["", f"## Parameter set `{study.params.name}`{label}", "", "Effort of the double support (N m s):",
@@ -422,6 +419,17 @@ def render(
     lines += _claims_section(studies)
     lines += ["", "## Where the project and the paper differ, and why", ""]
     lines += differences(default, table, references[default.params.name])
+    if extensions.hips is not None:
+        lines += ["", "## A joint in each hip: the 13-DOF biped (beyond the paper)", "",
+                  f"The paper's conclusion asks for it: `{extensions.hips.params.name}` is the default set with a yaw, "
+                  "a roll and a pitch joint in each hip (docs/model.md sections 2.1 and 5.2), all actuated by impulses "
+                  "at the double support and free in the single support, 13 coordinates instead of 9, 11 actuated "
+                  "joints instead of 7. The same BVP and closure, the same LP with the friction cone. At the paper's "
+                  "three points, the 9-DOF default set (first number) beside the 13-DOF set (second); the optimal "
+                  "normal gait, the anti-normal one at its amplitude:", ""]
+        lines += hips_lines(default, extensions.hips)
+        lines += ["", f"![Fig. 4, parameter set {extensions.hips.params.name}]"
+                  f"(fig4-{extensions.hips.params.name}.png)", ""]
     lines += _maps_section(extensions.maps, figures)
     if extensions.stability:
         lines += ["", "## Stability of the gaits (beyond the paper)", "",
@@ -466,6 +474,8 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     figures["Effort against the joint-rate bound"] = (
         rate_bound_figure(extensions.reviewer.rate_curve, default.params.name), RATE_FIGURE)
     figures.update(walking_figures(extensions.walking, default.params.name))
+    figures[f"Fig. 4, parameter set {extensions.hips.params.name}"] = (extensions.hips.fig4(),
+                                                                    f"fig4-{extensions.hips.params.name}.png")
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, extensions))
@@ -484,4 +494,4 @@ def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMa
     checks = ReviewerChecks(readings, rate_bound_curve(params, math.radians(PAPER_ALPHA_DEG)),
                             human_comparison(params, coarse_step=coarse_step))
     walking = compute_walking(executor, default, walk_alpha_step)
-    return Extensions(all_maps, [p.result() for p in points], checks, walking)
+    return Extensions(all_maps, [p.result() for p in points], checks, walking, hips_study(executor, coarse_step))

@@ -28,41 +28,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from .flow import BallisticFlow, hermite_samples
-from .impulses import ImpactProblem
 from ..model.biped import BipedModel
+from ..model.exchange import KinematicExchange, LinearExchange, leg_exchange
+from .flow import BallisticFlow, hermite_samples
+from .impulses import ImpactLayout, ImpactProblem
 from .samples import SampleEvaluator
-
-# The configuration map at double support, q' = P q (docs/model.md section 5): rows q1'..q9'.
-P_MATRIX = np.zeros((9, 9))
-for _row, _entries in enumerate(
-    [{0: -1}, {1: 1, 2: 1, 3: 1, 7: 1, 8: 1}, {8: -1}, {7: -1}, {4: -1}, {6: 1}, {5: 1}, {3: -1}, {2: -1}]
-):
-    for _col, _val in _entries.items():
-        P_MATRIX[_row, _col] = _val
-P_INVERSE = np.linalg.inv(P_MATRIX)
-
-MIRROR = np.diag([1.0, -1.0, 1.0])  # y -> -y: the next step is the mirror image of this one
-
-
-def exchange(q: np.ndarray) -> np.ndarray:
-    """The leg exchange P: a configuration or joint velocity at double support (this step's
-    coordinates) in the next step's coordinates."""
-    return P_MATRIX @ q
-
-
-def mirror_for(stance_side: str) -> np.ndarray:
-    """The map from a step's model frame (stance leg 1) to world axes: identity with the right
-    foot in stance, the mirror y -> -y with the left."""
-    if stance_side not in ("right", "left"):
-        raise ValueError(f"stance side must be 'right' or 'left', got {stance_side!r}")
-    return np.eye(3) if stance_side == "right" else MIRROR
-
-
-def other_side(stance_side: str) -> str:
-    """The stance side of the next step."""
-    return "left" if stance_side == "right" else "right"
-
 
 GRAZING_HEIGHT = 1e-8
 """Largest height (m) of a swing-tip minimum that counts as a touchdown: a tangential (grazing)
@@ -132,84 +102,111 @@ def _root(f, a: float, b: float) -> float:
 
 
 def locked_rotation(bm: BipedModel, q_t: np.ndarray) -> np.ndarray:
-    """z_d (12,): unit-rate rigid rotation of the locked biped about the foot-to-foot line.
+    """z_d (nX,): unit-rate rigid rotation of the locked biped about the foot-to-foot line.
 
-    Only q1d and q2d are non-zero; the rotation axis points from the old stance tip (origin)
-    to the new one. Requires q1 = 0, as every double-support configuration has.
+    Only the stance ankle's rates are non-zero (roll and pitch, and spin if the model has it);
+    the rotation axis points from the old stance tip (origin) to the new one. Requires q1 = 0 for
+    legs of pitch joints only, as every double-support configuration of theirs has.
     """
     tip = bm.swing_tip(q_t)
     axis = tip / np.linalg.norm(tip)
-    z = np.zeros(12)
-    z[3], z[4] = axis[0], axis[1]
+    z = np.zeros(bm.double_support.nv)
+    if bm.spin:
+        z[3:6] = np.linalg.solve(_ankle_axes(q_t), axis)
+    else:
+        z[3], z[4] = axis[0], axis[1]
     return z
 
 
-class ImpactMap:
-    """The double support at the touchdown configuration ``q_t`` (rad): D_e, J1, J2 and the
-    locked rotation z_d there (extended coordinates X = [x0, y0, z0, q1..q9], this step's
-    frame), and the maps that connect this step's end to the next step's start."""
+def _ankle_axes(q: np.ndarray) -> np.ndarray:
+    """The stance shin's angular velocity (columns, world axes) per unit rate of its ankle's roll,
+    pitch and spin at ``q``."""
+    cr, sr, cp, sp = np.cos(q[0]), np.sin(q[0]), np.cos(q[1]), np.sin(q[1])
+    return np.array([[1.0, 0.0, sp], [0.0, cr, -sr * cp], [0.0, sr, cr * cp]])
 
-    def __init__(self, bm: BipedModel, q_t: np.ndarray) -> None:
-        self.q_t = q_t
+
+class ImpactMap:
+    """The double support at the touchdown configuration ``q_t`` (rad): D_e, the contact
+    Jacobians J1, J2 and the locked rotation z_d there (the double-support model's coordinates X,
+    this step's frame), and the maps that connect this step's end to the next step's start.
+
+    J1 and J2 are the old and new stance tips' positions (3 rows each, m per unit of X); with
+    lateral hip joints each has a fourth row, the foot's spin about its shin (rad/s), which the
+    ground holds while the foot is down (docs/model.md section 5.2)."""
+
+    def __init__(self, bm: BipedModel, exchange: LinearExchange | KinematicExchange, q_t: np.ndarray) -> None:
+        self.bm, self.exchange, self.q_t = bm, exchange, q_t
         self.mass_matrix = bm.mass_matrix(q_t)
         self.j1, self.j2 = bm.tip_jacobians(q_t)
+        if bm.spin:
+            spin = np.zeros(bm.double_support.nv)
+            spin[5] = 1.0
+            self.j1 = np.vstack([self.j1, spin])
+            self.j2 = np.vstack([self.j2, exchange.spin_row(q_t)])
         self.locked_rotation = locked_rotation(bm, q_t)
+        self.layout = ImpactLayout.of(bm)
 
     @property
     def momentum_row(self) -> np.ndarray:
-        """z_d^T D_e (12,): Xd -> angular momentum about the foot-to-foot line (kg m^2/s)."""
+        """z_d^T D_e (nX,): Xd -> angular momentum about the foot-to-foot line (kg m^2/s)."""
         return self.locked_rotation @ self.mass_matrix
 
     def next_step_velocity(self, qd_a: np.ndarray) -> np.ndarray:
         """Xd^a: the next step's initial joint velocity ``qd_a`` (its own coordinates, rad/s)
-        in this step's extended coordinates, the new stance tip at rest (docs/model.md section 5)."""
-        qd = P_INVERSE @ qd_a
-        return np.concatenate([-self.j2[:, 3:] @ qd, qd])
+        in this step's double-support coordinates, the new stance tip at rest (docs/model.md
+        section 5)."""
+        return self.exchange.next_velocity(self.q_t, self.j2, qd_a)
 
     def problem(self, qd_b: np.ndarray, qd_a: np.ndarray) -> ImpactProblem:
         """Eqs. (6)-(10): this step ends with joint velocity ``qd_b``, the next starts with
         ``qd_a`` (in its own coordinates)."""
-        xd_b = np.concatenate([np.zeros(3), qd_b])
-        return ImpactProblem(self.mass_matrix, self.j1, self.j2, xd_b, self.next_step_velocity(qd_a),
-                             self.locked_rotation)
+        return ImpactProblem(self.mass_matrix, self.j1, self.j2, self.bm.embed(qd_b), self.next_step_velocity(qd_a),
+                             self.locked_rotation, self.layout)
 
     def closure_gap(self, qd_a: np.ndarray, qd_b: np.ndarray) -> float:
         """z_d^T D_e (Xd^a - Xd^b) (kg m^2/s): zero when the double support can close the cycle."""
-        xd_b = np.concatenate([np.zeros(3), qd_b])
+        xd_b = self.bm.embed(qd_b)
         return float(self.locked_rotation @ self.mass_matrix @ (self.next_step_velocity(qd_a) - xd_b))
 
     def forward(self, qd_b: np.ndarray, i_minus: np.ndarray, i_plus: np.ndarray) -> np.ndarray:
         """The next step's initial joint velocity (its own coordinates, rad/s) when this step
         ends with ``qd_b`` and the double support applies the joint impulses ``i_minus`` and
-        ``i_plus`` (N m s, q3..q9) around the passive impact: eqs. (6)-(10) run forward as three
-        impacts, the old stance tip keeping its velocity through I^-, the new one at rest after
-        the impact and after I^+; then the leg exchange. ``qd_b`` may also be 9 x k (k
-        velocities, one per column: k results, as columns)."""
-        xd_b = np.concatenate([np.zeros((3,) + qd_b.shape[1:]), qd_b])
-        xd_minus = impact_with(self.mass_matrix, self.j1, xd_b, i_minus, at_rest=False)
-        xd_plus = impact_with(self.mass_matrix, self.j2, xd_minus, np.zeros(7), at_rest=True)
-        xd_a = impact_with(self.mass_matrix, self.j2, xd_plus, i_plus, at_rest=True)
-        return exchange(xd_a[3:])
+        ``i_plus`` (N m s, the actuated joints) around the passive impact: eqs. (6)-(10) run
+        forward as three impacts, the old stance tip keeping its velocity through I^-, the new
+        one at rest after the impact and after I^+; then the leg exchange. ``qd_b`` may also be
+        nq x k (k velocities, one per column: k results, as columns)."""
+        bm = self.bm
+        if qd_b.ndim == 1:
+            xd_b = bm.embed(qd_b)
+        else:
+            xd_b = np.zeros((bm.double_support.nv, qd_b.shape[1]))
+            xd_b[bm.ds_of_single] = qd_b
+        rows = self.layout.joints
+        xd_minus = impact_with(self.mass_matrix, self.j1, xd_b, i_minus, rows, at_rest=False)
+        xd_plus = impact_with(self.mass_matrix, self.j2, xd_minus, np.zeros(self.layout.na), rows, at_rest=True)
+        xd_a = impact_with(self.mass_matrix, self.j2, xd_plus, i_plus, rows, at_rest=True)
+        return self.exchange.velocity(self.q_t, xd_a)
 
     def closure_gradients(self) -> tuple[np.ndarray, np.ndarray]:
         """d gap / d qd_a (in the next step's coordinates) and d gap / d qd_b, at this
         configuration (the gap is linear in both)."""
         row = self.momentum_row
-        d_a = (row[3:] - row[:3] @ self.j2[:, 3:]) @ P_INVERSE
-        return d_a, -row[3:]
+        d_a = self.exchange.next_velocity_gain(self.q_t, self.j2, row)
+        return d_a, -row[self.bm.ds_of_single]
 
 
 def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, joint_impulse: np.ndarray,
-                at_rest: bool) -> np.ndarray:
-    """The extended velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R with
-    the contact point of ``contact`` (J, 3 x 12) at rest after it (``at_rest``) or keeping its
-    velocity (J Xd' = J Xd); ``joint_impulse`` I on q3..q9 (N m s). ``xd`` may be 12 x k
-    (k velocities as columns, the same impulse added to each)."""
-    kkt = np.zeros((15, 15))
-    kkt[:12, :12], kkt[:12, 12:], kkt[12:, :12] = mass_matrix, -contact.T, contact
-    rhs = np.concatenate([mass_matrix @ xd, np.zeros((3,) + xd.shape[1:]) if at_rest else contact @ xd])
-    rhs[5:12] += joint_impulse if xd.ndim == 1 else joint_impulse[:, None]
-    return np.linalg.solve(kkt, rhs)[:12]
+                rows: np.ndarray | slice, at_rest: bool) -> np.ndarray:
+    """The double-support velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R
+    with the contact of ``contact`` (J, c x nX) at rest after it (``at_rest``) or keeping its
+    velocity (J Xd' = J Xd); ``joint_impulse`` I on the actuated coordinates, rows ``rows`` of X
+    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each)."""
+    n, c = mass_matrix.shape[0], contact.shape[0]
+    kkt = np.zeros((n + c, n + c))
+    kkt[:n, :n], kkt[:n, n:], kkt[n:, :n] = mass_matrix, -contact.T, contact
+    rhs = np.concatenate([mass_matrix @ xd, np.zeros((c,) + xd.shape[1:]) if at_rest else contact @ xd])
+    rhs[rows] += joint_impulse if xd.ndim == 1 else joint_impulse[:, None]
+    return np.linalg.solve(kkt, rhs)[:n]
 
 
 class HybridStep:
@@ -219,6 +216,7 @@ class HybridStep:
     def __init__(self, bm: BipedModel) -> None:
         self.bm = bm
         self.samples = SampleEvaluator(bm)
+        self.exchange = leg_exchange(bm)
         self._flows: dict[int, BallisticFlow] = {}
 
     def flow(self, steps: int) -> BallisticFlow:
@@ -233,4 +231,4 @@ class HybridStep:
 
     def impact(self, q_t: np.ndarray) -> ImpactMap:
         """The reset's double support at touchdown configuration ``q_t``."""
-        return ImpactMap(self.bm, q_t)
+        return ImpactMap(self.bm, self.exchange, q_t)

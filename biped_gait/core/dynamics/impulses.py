@@ -1,7 +1,10 @@
 """Impulsive double support (docs/model.md section 4, paper eqs. 6-10) and its minimum-effort solution.
 
-Unknowns (47), in this order: Xd^- (12), I^- (7), I_R1^- (3), Xd^+ (12), I_R2 (3), I^+ (7),
-I_R2^+ (3). Equations (42):
+Unknowns, in this order (``ImpactLayout``; the sizes of the paper's 9-DOF model in brackets):
+Xd^- (nX [12]), I^- (nA [7]), I_R1^- (c1 [3]), Xd^+ (nX), I_R2 (c2 [3]), I^+ (nA), I_R2^+ (c2), nX
+the double-support coordinates, nA the actuated joints, c1 and c2 the rows of the contact
+Jacobians J1 and J2 (the tips' positions, and with lateral hip joints the feet's spin, whose
+reactions are moment impulses). Equations (3 nX + c1 + c2 [42]):
 
     (6)  D_e Xd^- - B_e I^- - J1^T I_R1^- = D_e Xd^b
     (7)  J1 Xd^- = J1 Xd^b
@@ -9,9 +12,11 @@ I_R2^+ (3). Equations (42):
     (9)  J2 Xd^+ = 0
     (10) -D_e Xd^+ - B_e I^+ - J2^T I_R2^+ = -D_e Xd^a
 
-Their rank is 41: y = [z_d; 0; z_d; 0; z_d] is a left null vector (z_d the locked rotation
-about the foot-to-foot line), so the system is consistent only if y^T b = z_d^T D_e (Xd^b -
-Xd^a) = 0. One dependent row is dropped and the closure residual is checked and reported.
+When y = [z_d; 0; z_d; 0; z_d] is a left null vector (z_d the locked rotation about the
+foot-to-foot line: always for legs of pitch joints, and for lateral hip joints when both feet's
+spin axes are vertical, i.e. both ankle rolls are zero), the rank is one short, the system is
+consistent only if y^T b = z_d^T D_e (Xd^b - Xd^a) = 0, and one dependent row is dropped; the
+closure residual is checked and reported.
 
 Effort ``l1``: W = sum |I^-| + |I^+| (N m s) as a linear program solved by HiGHS through
 ``highspy`` (global optimum; its dual certificate is checked). Effort ``l2``: sum of squared impulses by OSQP.
@@ -19,8 +24,8 @@ Impulses in N m s (joints) and N s (reactions); velocities in m/s and rad/s.
 
 Options (``EffortOptions``, docs/model.md section 4.4): the friction cone of the floor on the
 three reaction impulses, linearized as the inscribed octagonal pyramid (so that no impulse
-needs more than ``friction``); a bound on the joint rates q3..q9 between the sub-phases (Xd^-,
-Xd^+); and the effort's reading, on joint angles (``joint``, the paper's eq. 12) or on the
+needs more than ``friction``); a bound on the actuated joints' rates between the sub-phases
+(Xd^-, Xd^+); and the effort's reading, on joint angles (``joint``, the paper's eq. 12) or on the
 absolute angles of the links (``absolute``: each link's net torque impulse, its proximal
 joint's minus its distal joints').
 """
@@ -35,23 +40,116 @@ from dataclasses import dataclass, replace
 import highspy
 import numpy as np
 
-N_UNKNOWN = 47
+from ..model.biped import BipedModel
+
 EFFORTS = ("l1", "l2")
 COORDINATES = ("joint", "absolute")
-# Slices of the unknown vector.
-XD_MINUS = slice(0, 12)
-I_MINUS = slice(12, 19)
-IR1_MINUS = slice(19, 22)
-XD_PLUS = slice(22, 34)
-IR2 = slice(34, 37)
-I_PLUS = slice(37, 44)
-IR2_PLUS = slice(44, 47)
-_B_E = np.vstack([np.zeros((5, 7)), np.eye(7)])
+CONE_SIDES = 8  # the friction cone's inscribed pyramid
+
+
+@dataclass(frozen=True)
+class ImpactLayout:
+    """The shape of one model's double-support problem: ``nx`` coordinates X, the actuated ones
+    at ``joint_rows`` of X, ``contact_old`` and ``contact_new`` rows of J1 and J2, and the
+    absolute reading of the effort (``absolute_rows``, one row over the actuated joints per
+    link). Everything hashable, so that the effort's parts are cached per layout."""
+
+    nx: int
+    joint_rows: tuple[int, ...]
+    contact_old: int
+    contact_new: int
+    absolute_rows: tuple[tuple[float, ...], ...]
+
+    @classmethod
+    def of(cls, bm: BipedModel) -> "ImpactLayout":
+        """The layout of ``bm``'s double support."""
+        contacts = 4 if bm.spin else 3
+        return _layout(bm.double_support.nv, tuple(int(k) for k in bm.ds_actuated), contacts, contacts,
+                       absolute_reading(bm))
+
+    @property
+    def na(self) -> int:
+        return len(self.joint_rows)
+
+    @property
+    def joints(self) -> np.ndarray | slice:
+        """Rows of X of the actuated joints (a slice when they are contiguous)."""
+        rows = self.joint_rows
+        contiguous = rows == tuple(range(rows[0], rows[0] + len(rows)))
+        return slice(rows[0], rows[-1] + 1) if contiguous else np.array(rows)
+
+    def _spans(self) -> tuple[slice, ...]:
+        sizes = (self.nx, self.na, self.contact_old, self.nx, self.contact_new, self.na, self.contact_new)
+        ends = np.cumsum(sizes)
+        return tuple(slice(int(e - n), int(e)) for e, n in zip(ends, sizes))
+
+    xd_minus = property(lambda self: self._spans()[0], doc="Xd^-: after I^-, before the impact")
+    i_minus = property(lambda self: self._spans()[1], doc="I^-: joint impulses before the impact")
+    ir1_minus = property(lambda self: self._spans()[2], doc="I_R1^-: the old stance tip's reaction")
+    xd_plus = property(lambda self: self._spans()[3], doc="Xd^+: just after the passive impact")
+    ir2 = property(lambda self: self._spans()[4], doc="I_R2: the passive impact at the new stance tip")
+    i_plus = property(lambda self: self._spans()[5], doc="I^+: joint impulses after the impact")
+    ir2_plus = property(lambda self: self._spans()[6], doc="I_R2^+: the new stance tip's reaction to I^+")
+
+    @property
+    def unknowns(self) -> int:
+        return self._spans()[6].stop
+
+    @property
+    def equations(self) -> int:
+        return 3 * self.nx + self.contact_old + self.contact_new
+
+    @property
+    def reactions(self) -> tuple[slice, slice, slice]:
+        """The three reaction impulses (forces first, then a spin moment impulse if any)."""
+        return self.ir1_minus, self.ir2, self.ir2_plus
+
+    @property
+    def b_e(self) -> np.ndarray:
+        """B_e (nX x nA): joint impulses act on the actuated coordinates."""
+        out = np.zeros((self.nx, self.na))
+        out[list(self.joint_rows), range(self.na)] = 1.0
+        return out
+
+    @property
+    def absolute(self) -> np.ndarray:
+        return np.array(self.absolute_rows, dtype=float)
+
+
+@lru_cache(maxsize=16)
+def _layout(nx: int, joint_rows: tuple[int, ...], contact_old: int, contact_new: int,
+            absolute_rows: tuple[tuple[float, ...], ...]) -> ImpactLayout:
+    return ImpactLayout(nx, joint_rows, contact_old, contact_new, absolute_rows)
+
+
+def absolute_reading(bm: BipedModel) -> tuple[tuple[float, ...], ...]:
+    """The effort read on the links' absolute angles (docs/model.md section 4.4): per actuated
+    joint, the net torque impulse on the link it drives, its own impulse less those of the nearest
+    joints beyond that turn about the same axis (found through joints about other axes, which do
+    not change that angle at the double support). The stance shin's (the knee's reaction on a link
+    whose own joint, the ankle, is passive) is not counted."""
+    coordinates, parents = bm.coordinates, bm.single.parents  # joint k + 1 is coordinate k
+    children: dict[int, list[int]] = {}
+    for k in range(len(coordinates)):
+        children.setdefault(parents[k + 1] - 1, []).append(k)
+    actuated = [k for k, c in enumerate(coordinates) if c.actuated]
+    rows = []
+    for k in actuated:
+        row, frontier = [0.0] * len(actuated), list(children.get(k, []))
+        row[actuated.index(k)] = 1.0
+        while frontier:
+            j = frontier.pop(0)
+            if coordinates[j].axis == coordinates[k].axis:
+                row[actuated.index(j)] = -1.0
+            else:
+                frontier += children.get(j, [])
+        rows.append(tuple(row))
+    return tuple(rows)
 
 
 @dataclass(frozen=True)
 class ImpactProblem:
-    """The data of one double support: D_e, J1, J2 at q(T), Xd^b, Xd^a, and z_d."""
+    """The data of one double support: D_e, J1, J2 at q(T), Xd^b, Xd^a, z_d, and the layout."""
 
     mass_matrix: np.ndarray
     j1: np.ndarray
@@ -59,27 +157,35 @@ class ImpactProblem:
     xd_b: np.ndarray
     xd_a: np.ndarray
     locked_rotation: np.ndarray
+    layout: ImpactLayout
 
     def equations(self) -> tuple[np.ndarray, np.ndarray]:
-        """The 42 x 47 matrix and right-hand side of eqs. (6)-(10), in the module's order."""
-        d, j1, j2 = self.mass_matrix, self.j1, self.j2
-        a = np.zeros((42, N_UNKNOWN))
-        b = np.zeros(42)
-        a[0:12, XD_MINUS], a[0:12, I_MINUS], a[0:12, IR1_MINUS] = d, -_B_E, -j1.T
-        b[0:12] = d @ self.xd_b
-        a[12:15, XD_MINUS] = j1
-        b[12:15] = j1 @ self.xd_b
-        a[15:27, XD_PLUS], a[15:27, XD_MINUS], a[15:27, IR2] = d, -d, -j2.T
-        a[27:30, XD_PLUS] = j2
-        a[30:42, XD_PLUS], a[30:42, I_PLUS], a[30:42, IR2_PLUS] = -d, -_B_E, -j2.T
-        b[30:42] = -d @ self.xd_a
+        """The matrix and right-hand side of eqs. (6)-(10), in the module's order."""
+        d, j1, j2, lay = self.mass_matrix, self.j1, self.j2, self.layout
+        n, c1, c2 = lay.nx, lay.contact_old, lay.contact_new
+        b_e = lay.b_e
+        rows = np.cumsum([0, n, c1, n, c2, n])
+        a = np.zeros((lay.equations, lay.unknowns))
+        b = np.zeros(lay.equations)
+        r6, r7, r8, r9, r10 = (slice(int(rows[k]), int(rows[k + 1])) for k in range(5))
+        a[r6, lay.xd_minus], a[r6, lay.i_minus], a[r6, lay.ir1_minus] = d, -b_e, -j1.T
+        b[r6] = d @ self.xd_b
+        a[r7, lay.xd_minus] = j1
+        b[r7] = j1 @ self.xd_b
+        a[r8, lay.xd_plus], a[r8, lay.xd_minus], a[r8, lay.ir2] = d, -d, -j2.T
+        a[r9, lay.xd_plus] = j2
+        a[r10, lay.xd_plus], a[r10, lay.i_plus], a[r10, lay.ir2_plus] = -d, -b_e, -j2.T
+        b[r10] = -d @ self.xd_a
         return a, b
 
     def left_null_vector(self) -> np.ndarray:
-        """y (42,) with y^T A = 0: the conserved momentum about the foot-to-foot line."""
-        y = np.zeros(42)
+        """y with y^T A = 0 when the momentum about the foot-to-foot line is conserved: z_d on
+        the rows of eqs. (6), (8) and (10)."""
+        lay = self.layout
+        y = np.zeros(lay.equations)
         z = self.locked_rotation
-        y[0:12], y[15:27], y[30:42] = z, z, z
+        n, c1, c2 = lay.nx, lay.contact_old, lay.contact_new
+        y[0:n], y[n + c1: 2 * n + c1], y[2 * n + c1 + c2:] = z, z, z
         return y
 
     def closure_residual(self) -> float:
@@ -94,28 +200,11 @@ class ImpactProblem:
         return replace(self, xd_a=self.xd_a + s * z), s
 
 
-# The reading of the effort on absolute link angles: rows of the net torque impulse on the stance
-# thigh, the pelvis and trunk (pitch), the trunk (yaw), the two arms, the swing thigh and the
-# swing shin, from the joint impulses q3..q9 (stance knee, stance hip, torso yaw, stance-side
-# shoulder, swing-side shoulder, swing hip, swing knee). The stance shin's (-I3, the knee's
-# reaction on a link whose own joint, the ankle, is passive) is not counted.
-ABSOLUTE_READING = np.array([
-    [1, -1, 0, 0, 0, 0, 0],
-    [0, 1, 0, -1, -1, -1, 0],
-    [0, 0, 1, 0, 0, 0, 0],
-    [0, 0, 0, 1, 0, 0, 0],
-    [0, 0, 0, 0, 1, 0, 0],
-    [0, 0, 0, 0, 0, 1, -1],
-    [0, 0, 0, 0, 0, 0, 1],
-], dtype=float)
-CONE_SIDES = 8  # the friction cone's inscribed pyramid
-
-
 @dataclass(frozen=True)
 class EffortOptions:
     """How the double support's impulses are chosen beyond eqs. (6)-(10): the floor's friction
-    coefficient on the reaction impulses (inf: no cone), a bound (rad/s) on the joint rates
-    q3..q9 of Xd^- and Xd^+ (inf: none), and the effort's reading (``joint``/``absolute``)."""
+    coefficient on the reaction impulses (inf: no cone), a bound (rad/s) on the actuated joints'
+    rates in Xd^- and Xd^+ (inf: none), and the effort's reading (``joint``/``absolute``)."""
 
     friction: float = math.inf
     rate_bound: float = math.inf
@@ -129,10 +218,10 @@ class EffortOptions:
         if self.coordinates not in COORDINATES:
             raise ValueError(f"unknown effort coordinates {self.coordinates!r}: use 'joint' or 'absolute'")
 
-    @property
-    def reading(self) -> np.ndarray:
-        """The rows whose absolute values the effort sums, applied to I^- and to I^+ (7 columns)."""
-        return ABSOLUTE_READING if self.coordinates == "absolute" else np.eye(7)
+    def reading(self, layout: ImpactLayout) -> np.ndarray:
+        """The rows whose absolute values the effort sums, applied to I^- and to I^+ (a column per
+        actuated joint)."""
+        return layout.absolute if self.coordinates == "absolute" else np.eye(layout.na)
 
 
 @dataclass(frozen=True)
@@ -146,87 +235,114 @@ class ImpulseSolution:
     W: float
     equation_residual: float
     closure_residual: float
+    layout: ImpactLayout
     duality_gap: float = float("nan")
 
-    xd_minus = property(lambda self: self.x[XD_MINUS], doc="Xd^-: after I^-, before the impact (12)")
-    i_minus = property(lambda self: self.x[I_MINUS], doc="I^-: joint impulses before the impact (N m s)")
-    ir1_minus = property(lambda self: self.x[IR1_MINUS], doc="I_R1^-: old stance tip's reaction (N s)")
-    xd_plus = property(lambda self: self.x[XD_PLUS], doc="Xd^+: just after the passive impact (12)")
-    ir2 = property(lambda self: self.x[IR2], doc="I_R2: the passive impact at the new stance tip (N s)")
-    i_plus = property(lambda self: self.x[I_PLUS], doc="I^+: joint impulses after the impact (N m s)")
-    ir2_plus = property(lambda self: self.x[IR2_PLUS], doc="I_R2^+: new stance tip's reaction to I^+ (N s)")
+    xd_minus = property(lambda self: self.x[self.layout.xd_minus], doc="Xd^-: after I^-, before the impact")
+    i_minus = property(lambda self: self.x[self.layout.i_minus], doc="I^-: joint impulses before the impact (N m s)")
+    ir1_minus = property(lambda self: self.x[self.layout.ir1_minus][:3], doc="I_R1^-: old stance tip's reaction (N s)")
+    xd_plus = property(lambda self: self.x[self.layout.xd_plus], doc="Xd^+: just after the passive impact")
+    ir2 = property(lambda self: self.x[self.layout.ir2][:3], doc="I_R2: the passive impact at the new stance tip (N s)")
+    i_plus = property(lambda self: self.x[self.layout.i_plus], doc="I^+: joint impulses after the impact (N m s)")
+    ir2_plus = property(lambda self: self.x[self.layout.ir2_plus][:3], doc="I_R2^+: new stance tip's reaction to I^+ (N s)")
+
+    @property
+    def spin_impulses(self) -> np.ndarray:
+        """The ground's moment impulses (N m s) about the feet's spin axes in I_R1^-, I_R2 and
+        I_R2^+ (empty for legs of pitch joints, whose model holds the spin implicitly)."""
+        lay = self.layout
+        if lay.contact_old == 3:
+            return np.zeros(0)
+        return np.array([self.x[sl][3] for sl in lay.reactions])
+
+    @property
+    def joint_rates(self) -> np.ndarray:
+        """The actuated joints' rates in Xd^- and Xd^+ (rad/s)."""
+        rows = self.layout.joints
+        return np.concatenate([self.xd_minus[rows], self.xd_plus[rows]])
 
 
-Equations = tuple[np.ndarray, np.ndarray]  # A (42 x 47) and b (42) of eqs. (6)-(10)
+Equations = tuple[np.ndarray, np.ndarray]  # A and b of eqs. (6)-(10)
 
 
 def _reduced_equations(problem: ImpactProblem, equations: Equations) -> Equations:
-    """Eqs. (6)-(10) less the one row the null vector y makes dependent (its largest entry)."""
+    """Eqs. (6)-(10) less the one row the null vector y makes dependent (its largest entry),
+    when y is a null vector (the momentum about the feet line is conserved); else all of them."""
     a, b = equations
-    drop = int(np.argmax(np.abs(problem.left_null_vector())))
-    keep = np.arange(42) != drop
+    y = problem.left_null_vector()
+    if problem.layout.contact_old > 3 and np.max(np.abs(y @ a)) > NULL_TOLERANCE * np.max(np.abs(a)):
+        return a, b
+    drop = int(np.argmax(np.abs(y)))
+    keep = np.arange(len(b)) != drop
     return a[keep], b[keep]
+
+
+NULL_TOLERANCE = 1e-9
+"""y^T A below this (relative to A's largest entry) counts as zero: the feet's spin axes are
+vertical to rounding, and their moment impulses have no component along the feet line."""
 
 
 def _sign_constraints(problem: ImpactProblem) -> tuple[np.ndarray, np.ndarray]:
     """Rows G x <= 0: swing tip moving down before the impact, old stance tip up after it."""
-    g = np.zeros((2, N_UNKNOWN))
-    g[0, XD_MINUS] = problem.j2[2]
-    g[1, XD_PLUS] = -problem.j1[2]
+    lay = problem.layout
+    g = np.zeros((2, lay.unknowns))
+    g[0, lay.xd_minus] = problem.j2[2]
+    g[1, lay.xd_plus] = -problem.j1[2]
     return g, np.zeros(2)
 
 
-def _reaction_lower_bounds() -> np.ndarray:
+def _reaction_lower_bounds(layout: ImpactLayout) -> np.ndarray:
     """Lower bounds of the unknowns: the vertical components of the three reaction impulses
     non-negative (N s), the rest free (-inf)."""
-    lower = np.full(N_UNKNOWN, -np.inf)
-    for sl in (IR1_MINUS, IR2, IR2_PLUS):
-        lower[sl.stop - 1] = 0.0
+    lower = np.full(layout.unknowns, -np.inf)
+    for sl in layout.reactions:
+        lower[sl.start + 2] = 0.0
     return lower
 
 
-def effort(x: np.ndarray, reading: np.ndarray | None = None) -> float:
+def effort(x: np.ndarray, layout: ImpactLayout, reading: np.ndarray | None = None) -> float:
     """W = sum |I^-| + |I^+| (N m s), paper eq. (12); with ``reading``, the sum of the absolute
     values of ``reading @ I^-`` and ``reading @ I^+``."""
+    i_minus, i_plus = x[layout.i_minus], x[layout.i_plus]
     if reading is None:
-        return float(np.abs(x[I_MINUS]).sum() + np.abs(x[I_PLUS]).sum())
-    return float(np.abs(reading @ x[I_MINUS]).sum() + np.abs(reading @ x[I_PLUS]).sum())
+        return float(np.abs(i_minus).sum() + np.abs(i_plus).sum())
+    return float(np.abs(reading @ i_minus).sum() + np.abs(reading @ i_plus).sum())
 
 
-def friction_ratios(x: np.ndarray) -> np.ndarray:
+def friction_ratios(solution: ImpulseSolution) -> np.ndarray:
     """|horizontal| / vertical of the three reaction impulses I_R1^-, I_R2, I_R2^+: the friction
     coefficient each needs (inf where the vertical component is zero and the horizontal not)."""
     out = np.empty(3)
-    for k, sl in enumerate((IR1_MINUS, IR2, IR2_PLUS)):
-        fx, fy, fz = x[sl]
+    for k, force in enumerate((solution.ir1_minus, solution.ir2, solution.ir2_plus)):
+        fx, fy, fz = force
         horizontal = math.hypot(fx, fy)
         out[k] = horizontal / fz if fz > 0 else (0.0 if horizontal == 0 else math.inf)
     return out
 
 
-def _cone_rows(options: EffortOptions) -> np.ndarray:
+def _cone_rows(options: EffortOptions, layout: ImpactLayout) -> np.ndarray:
     """Rows G x <= 0 of the inscribed octagonal pyramid of the friction cone on each reaction
     impulse: cos(a) Ix + sin(a) Iy <= mu cos(pi/8) Iz for eight directions a (none for mu = inf)."""
     if not math.isfinite(options.friction):
-        return np.zeros((0, N_UNKNOWN))
+        return np.zeros((0, layout.unknowns))
     rows = []
     apothem = options.friction * math.cos(math.pi / CONE_SIDES)
-    for sl in (IR1_MINUS, IR2, IR2_PLUS):
+    for sl in layout.reactions:
         for k in range(CONE_SIDES):
             angle = 2 * math.pi * k / CONE_SIDES
-            row = np.zeros(N_UNKNOWN)
-            row[sl] = (math.cos(angle), math.sin(angle), -apothem)
+            row = np.zeros(layout.unknowns)
+            row[sl.start: sl.start + 3] = (math.cos(angle), math.sin(angle), -apothem)
             rows.append(row)
     return np.array(rows)
 
 
-def _unknown_bounds(options: EffortOptions) -> tuple[np.ndarray, np.ndarray]:
+def _unknown_bounds(options: EffortOptions, layout: ImpactLayout) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper bounds of the unknowns: the reactions' vertical components non-negative,
-    the joint rates of Xd^- and Xd^+ within the rate bound."""
-    lower, upper = _reaction_lower_bounds(), np.full(N_UNKNOWN, np.inf)
+    the actuated joints' rates in Xd^- and Xd^+ within the rate bound."""
+    lower, upper = _reaction_lower_bounds(layout), np.full(layout.unknowns, np.inf)
     if math.isfinite(options.rate_bound):
-        for sl in (XD_MINUS, XD_PLUS):
-            joints = slice(sl.start + 5, sl.stop)
+        for sl in (layout.xd_minus, layout.xd_plus):
+            joints = np.array(layout.joint_rows) + sl.start
             lower[joints], upper[joints] = -options.rate_bound, options.rate_bound
     return lower, upper
 
@@ -239,17 +355,18 @@ def _finish(problem: ImpactProblem, equations: Equations, effort_name: str, opti
         message=message,
         effort=effort_name,
         x=x,
-        W=effort(x, options.reading if options.coordinates != "joint" else None),
+        W=effort(x, problem.layout, options.reading(problem.layout) if options.coordinates != "joint" else None),
         equation_residual=float(np.max(np.abs(a @ x - b))),
         closure_residual=problem.closure_residual(),
+        layout=problem.layout,
         **kw,
     )
 
 
 @dataclass(frozen=True)
 class _Effort:
-    """The parts of the effort LP that depend only on the options: its variables are x (47),
-    then t (one per reading row of I^- and of I^+) bounding the absolute values summed; cost
+    """The parts of the effort LP that depend only on the options and the layout: its variables
+    are x (the layout's unknowns), then t (one per reading row of I^- and of I^+) bounding the absolute values summed; cost
     sum(t); bounds; the rows -t <= reading I <= t; the friction-cone rows."""
 
     cost: np.ndarray
@@ -264,23 +381,24 @@ class _Effort:
 
 
 @lru_cache(maxsize=16)
-def _effort_parts(options: EffortOptions) -> _Effort:
-    reading = options.reading
+def _effort_parts(options: EffortOptions, layout: ImpactLayout) -> _Effort:
+    reading = options.reading(layout)
+    n_x = layout.unknowns
     n_t = 2 * len(reading)
-    size = N_UNKNOWN + n_t
-    lower, upper = _unknown_bounds(options)
+    size = n_x + n_t
+    lower, upper = _unknown_bounds(options, layout)
     abs_rows = np.zeros((2 * n_t, size))
     k = 0
-    for block in (I_MINUS, I_PLUS):
+    for block in (layout.i_minus, layout.i_plus):
         for row in reading:  # row . I - t_k <= 0 and -row . I - t_k <= 0
             abs_rows[2 * k, block], abs_rows[2 * k + 1, block] = row, -row
-            abs_rows[2 * k: 2 * k + 2, N_UNKNOWN + k] = -1.0
+            abs_rows[2 * k: 2 * k + 2, n_x + k] = -1.0
             k += 1
     cone = np.zeros((0, size))
-    cone_x = _cone_rows(options)
+    cone_x = _cone_rows(options, layout)
     if len(cone_x):
         cone = np.hstack([cone_x, np.zeros((len(cone_x), n_t))])
-    return _Effort(np.concatenate([np.zeros(N_UNKNOWN), np.ones(n_t)]), np.concatenate([lower, np.zeros(n_t)]),
+    return _Effort(np.concatenate([np.zeros(n_x), np.ones(n_t)]), np.concatenate([lower, np.zeros(n_t)]),
                    np.concatenate([upper, np.full(n_t, np.inf)]), abs_rows, cone)
 
 
@@ -303,16 +421,17 @@ class _L1Program:
 
 def _l1_program(problem: ImpactProblem, equations: Equations, options: EffortOptions) -> _L1Program:
     """The absolute-value rows, the sign rows, the cone rows, and eqs. (6)-(10) less one dependent row."""
-    parts = _effort_parts(options)
+    parts = _effort_parts(options, problem.layout)
+    n_x = problem.layout.unknowns
     a_eq, b_eq = _reduced_equations(problem, equations)
     g, h = _sign_constraints(problem)
     n_abs, n_cone = len(parts.abs_rows), len(parts.cone_rows)
     inequalities = n_abs + len(g) + n_cone
     a = np.zeros((inequalities + len(a_eq), parts.size))
     a[:n_abs] = parts.abs_rows
-    a[n_abs: n_abs + len(g), :N_UNKNOWN] = g
+    a[n_abs: n_abs + len(g), :n_x] = g
     a[n_abs + len(g): inequalities] = parts.cone_rows
-    a[inequalities:, :N_UNKNOWN] = a_eq
+    a[inequalities:, :n_x] = a_eq
     return _L1Program(parts, a, np.concatenate([np.zeros(n_abs), h, np.zeros(n_cone), b_eq]), inequalities)
 
 
@@ -358,7 +477,7 @@ def solve_l1(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -
     status = highs.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
         message = f"impulse LP: model status is {highs.modelStatusToString(status)}"
-        return _finish(problem, equations, "l1", options, np.full(N_UNKNOWN, np.nan), False, message)
+        return _finish(problem, equations, "l1", options, np.full(problem.layout.unknowns, np.nan), False, message)
     solution = highs.getSolution()
     status = np.array(highs.getBasis().col_status, dtype=np.int8)
     row_dual = np.array(solution.row_dual)
@@ -366,8 +485,8 @@ def solve_l1(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -
     y_upper = np.where(status == int(highspy.HighsBasisStatus.kUpper), solution.col_dual, 0.0)
     gap = duality_gap(lp, highs.getInfo().objective_function_value, row_dual[lp.inequalities :],
                       row_dual[: lp.inequalities], y_lower, y_upper)
-    return _finish(problem, equations, "l1", options, np.array(solution.col_value[:N_UNKNOWN]), True, "optimal",
-                   duality_gap=gap)
+    return _finish(problem, equations, "l1", options, np.array(solution.col_value[: problem.layout.unknowns]), True,
+                   "optimal", duality_gap=gap)
 
 
 def duality_gap(lp: _L1Program, objective: float, y_eq: np.ndarray, y_ub: np.ndarray, y_lower: np.ndarray,
@@ -391,18 +510,21 @@ def solve_l2(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -
     from scipy import sparse
 
     equations = problem.equations()
+    lay = problem.layout
+    n_x = lay.unknowns
     a_eq, b_eq = _reduced_equations(problem, equations)
     g, h = _sign_constraints(problem)
-    cone = _cone_rows(options)
-    hessian = np.zeros((N_UNKNOWN, N_UNKNOWN))
-    gram = 2.0 * options.reading.T @ options.reading
-    hessian[I_MINUS, I_MINUS] = hessian[I_PLUS, I_PLUS] = gram
+    cone = _cone_rows(options, lay)
+    hessian = np.zeros((n_x, n_x))
+    reading = options.reading(lay)
+    gram = 2.0 * reading.T @ reading
+    hessian[lay.i_minus, lay.i_minus] = hessian[lay.i_plus, lay.i_plus] = gram
     rows = [a_eq, g, cone]
     lower = [b_eq, np.full(g.shape[0], -np.inf), np.full(len(cone), -np.inf)]
     upper = [b_eq, h, np.zeros(len(cone))]
-    for idx, (lo, up) in enumerate(zip(*_unknown_bounds(options))):
+    for idx, (lo, up) in enumerate(zip(*_unknown_bounds(options, lay))):
         if np.isfinite(lo) or np.isfinite(up):
-            row = np.zeros((1, N_UNKNOWN))
+            row = np.zeros((1, n_x))
             row[0, idx] = 1.0
             rows.append(row)
             lower.append(np.array([lo]))
@@ -410,7 +532,7 @@ def solve_l2(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -
     solver = osqp.OSQP()
     solver.setup(
         P=sparse.csc_matrix(np.triu(hessian)),
-        q=np.zeros(N_UNKNOWN),
+        q=np.zeros(n_x),
         A=sparse.csc_matrix(np.vstack(rows)),
         l=np.concatenate(lower),
         u=np.concatenate(upper),
@@ -426,7 +548,7 @@ def solve_l2(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -
     res = solver.solve(raise_error=False)
     status = str(res.info.status)
     ok = status == "solved" and res.info.status_polish == 1
-    x = np.asarray(res.x, float) if ok else np.full(N_UNKNOWN, np.nan)
+    x = np.asarray(res.x, float) if ok else np.full(n_x, np.nan)
     reason = status if status != "solved" else "polishing failed"
     return _finish(problem, equations, "l2", options, x, ok, "optimal" if ok else f"impulse QP: {reason}")
 

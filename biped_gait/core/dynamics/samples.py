@@ -1,8 +1,8 @@
 """Many states of the biped evaluated in one call: what the figures of a step, the walker and
 the world view need of each sample (docs/model.md sections 6 and 8).
 
-A sample is a state (q, qd) of the 9-DOF single-support model (rad, rad/s) with the stance tip at
-the world origin; a batch is n of them, the rows of two n x 9 arrays. ``SampleEvaluator`` gives,
+A sample is a state (q, qd) of the single-support model (rad, rad/s) with the stance tip at
+the world origin; a batch is n of them, the rows of two n x nq arrays. ``SampleEvaluator`` gives,
 for each row:
 
 - ``dynamics``: the ballistic acceleration qdd (ABA, rad/s^2), the ground reaction [Fx, Fy, Fz,
@@ -31,16 +31,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..model.biped import JOINT_NAMES, SWING_TIP, BipedModel
+from ..model.biped import PELVIS, SWING_TIP, BipedModel
 
 try:
     from ._samples_native import NativePlacements, NativeSamples
 except ImportError:  # not built (no compiler): the Python loops serve
     NativePlacements = NativeSamples = None
 
-PELVIS_JOINT = "stance_hip"  # its frame is the pelvis (base_link): at the pelvis centre, pitched with the pelvis
-_ARMS = (JOINT_NAMES[5], JOINT_NAMES[6])
-_FIRST_LINK_JOINT = 3  # the stance knee: it and every joint after it must stay above the ground
 
 
 @dataclass(frozen=True)
@@ -81,7 +78,7 @@ def ground_reaction_inverse_dynamics(bm: BipedModel, q: np.ndarray, qd: np.ndarr
     model, data = bm.extended, bm.extended_data
     x = bm.extended_state(q)
     xd = np.concatenate([np.zeros(3), qd])
-    xdd = np.concatenate([np.zeros(3), qdd])
+    xdd = np.concatenate([np.zeros(3), qdd])  # the extended model: the root translation, then q
     tau = pin.rnea(model, data, x, xd, xdd)
     return np.array([tau[0], tau[1], tau[2], data.f[1].angular[2]])
 
@@ -111,22 +108,24 @@ class SampleEvaluator:
         self.bm = bm
         model = bm.single
         self._swing_tip = model.getFrameId(SWING_TIP)
-        self._pelvis = model.getJointId(PELVIS_JOINT)
-        self._links = list(range(_FIRST_LINK_JOINT, model.njoints))
-        self._arms = [model.getJointId(name) for name in _ARMS]
+        pelvis = model.frames[model.getFrameId(PELVIS)]
+        self._pelvis, self._pelvis_offset = pelvis.parentJoint, pelvis.placement.translation.copy()
+        # The stance knee and every joint after it must stay above the ground.
+        self._links = list(range(model.getJointId(bm.names[bm.index("knee")]), model.njoints))
+        self._arms = [model.getJointId(bm.names[bm.index("shoulder", side)]) for side in ("stance", "swing")]
         self._hand = np.array([0.0, 0.0, -bm.params.arm.length])  # in the shoulder joint's frame
         self._tau = np.zeros(model.nv)
         self.native = (
-            NativeSamples(model.saveToString(), bm.extended.saveToString(), self._swing_tip, self._pelvis, self._links,
-                          self._arms, bm.params.arm.length)
+            NativeSamples(model.saveToString(), bm.extended.saveToString(), self._swing_tip, self._pelvis,
+                          self._pelvis_offset, self._links, self._arms, bm.params.arm.length)
             if _compiled(native) else None
         )
 
     def _states(self, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(q, qd) as two n x 9 arrays of the same n; ``ValueError`` if they are not."""
+        """(q, qd) as two n x nq arrays of the same n; ``ValueError`` if they are not."""
         q, qd = _rows(q, self.bm.single.nq), _rows(qd, self.bm.single.nv)
         if len(q) != len(qd):
-            raise ValueError(f"q and qd must have as many rows, got {len(q)} and {len(qd)} (n x 9 arrays)")
+            raise ValueError(f"q and qd must have as many rows, got {len(q)} and {len(qd)} (n x {self.bm.nq} arrays)")
         return q, qd
 
     def dynamics(self, q: np.ndarray, qd: np.ndarray) -> SampleDynamics:
@@ -142,7 +141,7 @@ class SampleEvaluator:
         for i in range(n):
             qdd[i] = pin.aba(model, data, q[i], qd[i], self._tau)
             grf[i] = ground_reaction_inverse_dynamics(bm, q[i], qd[i], qdd[i])
-            yaw[i] = bm.vertical_momentum_about(q[i], np.concatenate([np.zeros(3), qd[i]]), origin)
+            yaw[i] = bm.vertical_momentum_about(q[i], bm.embed(qd[i]), origin)
             pin.forwardKinematics(model, data, q[i])
             height[i] = pin.updateFramePlacement(model, data, self._swing_tip).translation[2]
             lowest[i] = min([data.oMi[j].translation[2] for j in self._links]
@@ -174,13 +173,15 @@ class SampleEvaluator:
         n = len(q)
         position, quaternion, velocity = np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 6))
         com, p, h = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+        offset = self._pelvis_offset  # the pelvis centre in its joint's frame
         for i in range(n):
             pin.forwardKinematics(model, data, q[i], qd[i])
             pelvis = data.oMi[self._pelvis]
-            position[i] = pelvis.translation
+            position[i] = pelvis.translation + pelvis.rotation @ offset
             quaternion[i] = pin.Quaternion(m @ pelvis.rotation @ m).coeffs()
-            velocity[i] = data.v[self._pelvis].vector  # linear, then angular
-            p[i], h[i], com[i] = bm.momentum(q[i], np.concatenate([np.zeros(3), qd[i]]))
+            twist = data.v[self._pelvis]
+            velocity[i] = np.concatenate([twist.linear + np.cross(twist.angular, offset), twist.angular])
+            p[i], h[i], com[i] = bm.momentum(q[i], bm.embed(qd[i]))
         return SamplePoses(position, quaternion, velocity[:, :3], velocity[:, 3:], com, p, h)
 
     def energy(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:

@@ -4,8 +4,9 @@ conditions that limit it, each a bit of a bitmask so that an atlas can store whi
 Conditions, checked a posteriori on the ballistic step (margins: a figure counts as positive
 when above them): the vertical ground reaction stays positive (N); the swing tip stays above the
 ground on (0.05 T, 0.95 T) (m), and reaches it from above (above it on [0.95 T, T), moving down
-or not at all at T); the swing knee never bends backwards (q9 >= -KNEE_TOLERANCE
-rad; negative q9 is a hyperextended swing knee, the mark of the backward-knee twin); the ground
+or not at all at T); the swing knee never bends backwards beyond the knee's lower limit in the
+joint table (q9 >= lower - KNEE_TOLERANCE rad; the paper's sets have 0: negative q9 is a
+hyperextended swing knee, the mark of the backward-knee twin); the ground
 reaction stays in the friction cone of the parameter set's coefficient (max |F_xy| / F_z <= mu).
 Before these: the BVP converged and the double support's impulse problem has a solution.
 """
@@ -67,8 +68,10 @@ def failure_message(step: BvpSolution, impulses: ImpulseSolution | None) -> str:
 
 
 def figure_limits(min_grf_z: float, min_swing_height: float, q9_min: float, max_friction_ratio: float,
-                  friction: float, min_late_swing_height: float, swing_arrival_speed: float) -> Limit:
-    """The conditions a solved ballistic step violates, from its figures (N, m, rad, -, m, m/s)."""
+                  friction: float, min_late_swing_height: float, swing_arrival_speed: float,
+                  knee_lower: float = 0.0) -> Limit:
+    """The conditions a solved ballistic step violates, from its figures (N, m, rad, -, m, m/s) and
+    the knee's lower limit (rad)."""
     limits = Limit(0)
     if not (min_late_swing_height > HEIGHT_MARGIN and swing_arrival_speed <= 0.0):
         limits |= Limit.ARRIVAL
@@ -76,7 +79,7 @@ def figure_limits(min_grf_z: float, min_swing_height: float, q9_min: float, max_
         limits |= Limit.GROUND_REACTION
     if not min_swing_height > HEIGHT_MARGIN:
         limits |= Limit.CLEARANCE
-    if not q9_min >= -KNEE_TOLERANCE:
+    if not q9_min >= knee_lower - KNEE_TOLERANCE:
         limits |= Limit.KNEE_HYPEREXTENSION
     if not max_friction_ratio <= friction:
         limits |= Limit.FRICTION
@@ -101,9 +104,11 @@ def describe(limits: Limit, min_grf_z: float, min_swing_height: float, q9_min: f
     return lines
 
 
-def judge(step: BvpSolution, impulses: ImpulseSolution | None, figures: StepFigures | None, friction: float) -> Verdict:
+def judge(step: BvpSolution, impulses: ImpulseSolution | None, figures: StepFigures | None, friction: float,
+          knee_lower: float = 0.0) -> Verdict:
     """The verdict on a gait from its ballistic step, its double support's impulses, its step
-    figures (the last two None when the BVP did not converge) and the friction coefficient."""
+    figures (the last two None when the BVP did not converge), the friction coefficient and the
+    knee's lower limit (rad)."""
     message = failure_message(step, impulses)
     if not step.converged:
         return Verdict(False, (message or "the ballistic BVP did not converge",), Limit.NO_CONVERGENCE)
@@ -111,5 +116,5 @@ def judge(step: BvpSolution, impulses: ImpulseSolution | None, figures: StepFigu
         return Verdict(False, (message or "the impulse problem has no solution",), Limit.NO_IMPULSES)
     values = (figures.min_grf_z, figures.min_swing_height, figures.q9_min, figures.max_friction_ratio, friction,
               figures.min_late_swing_height, figures.swing_arrival_speed)
-    limits = figure_limits(*values)
+    limits = figure_limits(*values, knee_lower)
     return Verdict(not limits, tuple(describe(limits, *values)), limits)

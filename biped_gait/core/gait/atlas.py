@@ -40,9 +40,10 @@ STEP_LENGTHS = np.round(np.arange(0.25, 0.65 + 1e-9, 0.025), 6)  # m
 PERIODS = np.round(np.arange(0.30, 0.65 + 1e-9, 0.025), 6)  # s
 ALPHAS = np.radians(np.arange(0.0, 45.0 + 1e-9, 5.0))  # rad
 
-# Arrays of a node (shape: grid shape + the trailing shape given), and their fill values.
+# Arrays of a node (shape: grid shape + the trailing shape given, "nq" the model's coordinates),
+# and their fill values.
 NODE_ARRAYS = {
-    "status": ((), np.uint8), "limits": ((), np.uint8), "qd_a": ((9,), np.float64), "theta": ((), np.float64),
+    "status": ((), np.uint8), "limits": ((), np.uint8), "qd_a": (("nq",), np.float64), "theta": ((), np.float64),
     "W": ((), np.float64), "min_grf_z": ((), np.float64), "min_swing_height": ((), np.float64),
     "max_friction_ratio": ((), np.float64), "q9_min": ((), np.float64), "h_t_minus": ((2,), np.float64),
     "h_t_plus": ((2,), np.float64), "spectral_radius": ((), np.float64),
@@ -136,9 +137,9 @@ class Atlas:
         (default: ``Grid.default()``)."""
         grid = grid or Grid.default()
         nodes = {}
-        for name, (tail, dtype) in NODE_ARRAYS.items():
+        for name, (_, dtype) in NODE_ARRAYS.items():
             fill = NodeStatus.NO_CONVERGENCE if name == "status" else (Limit.NO_CONVERGENCE if name == "limits" else np.nan)
-            nodes[name] = np.full(grid.shape + tail, fill, dtype=dtype)
+            nodes[name] = np.full(grid.shape + node_tail(name, params), fill, dtype=dtype)
         return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes,
                    source=source_fingerprint(params))
 
@@ -241,7 +242,8 @@ class Atlas:
         try:
             with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
-                current = meta.get("source") == source_fingerprint(params) or meta.get("fingerprint") == model_fingerprint(params)
+                current = (meta.get("source") == source_fingerprint(params)
+                           or meta.get("fingerprint") == model_fingerprint(params))
                 if meta.get("format") != ATLAS_FORMAT or not current:
                     raise AtlasError(f"the gait atlas {path} is stale (built for other parameters or model code): "
                                      f"rebuild it with `{rebuild}`")
@@ -253,11 +255,16 @@ class Atlas:
             if isinstance(exc, AtlasError):
                 raise
             raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`") from None
-        for name, (tail, _) in NODE_ARRAYS.items():
-            if nodes[name].shape != grid.shape + tail:
+        for name in NODE_ARRAYS:
+            if nodes[name].shape != grid.shape + node_tail(name, params):
                 raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`")
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
                    float(meta.get("build_seconds", math.nan)), meta.get("source", ""))
+
+
+def node_tail(name: str, params: BipedParams) -> tuple[int, ...]:
+    """The trailing shape of the node array ``name`` for the model of ``params``."""
+    return tuple(len(params.joints.coordinates()) if d == "nq" else d for d in NODE_ARRAYS[name][0])
 
 
 def _weights(axis: np.ndarray, x: float, cubic: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -1,7 +1,7 @@
 """The ballistic boundary-value problem with exact periodic closure (docs/model.md sections 3-4).
 
-Unknowns: qd(0) (9) and, in the ``theta`` closure, the trunk pitch theta at double support.
-Equations: q(T; q0(theta), qd(0)) = q_T(theta) (9) and, in the ``theta`` closure, the
+Unknowns: qd(0) (nq) and, in the ``theta`` closure, the trunk pitch theta at double support.
+Equations: q(T; q0(theta), qd(0)) = q_T(theta) (nq) and, in the ``theta`` closure, the
 conservation of the angular momentum about the foot-to-foot line through the double support,
 z_d^T D_e(q_T) (Xd^a - Xd^b) = 0 (1), from the hybrid step's impact map. Solved by the
 project's Newton/chord solver (``newton``) with the exact Jacobian of the computed flow map
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics import newton
-from .configurations import THETA_DIRECTION, GaitMode, boundary_configurations
+from .configurations import GaitMode, boundary_configurations
 from ..dynamics.flow import BallisticFlow, FlowResult
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import DEFAULTS, Settings
@@ -47,56 +47,61 @@ class BvpSolution:
 
 class ShootingProblem:
     """The residual F(u) of the shooting problem, u = [qd(0), theta], and its exact Jacobian,
-    for one (L m, T s, alpha rad, mode)."""
+    for one (L m, T s, alpha rad, mode, step width m or None for the hips' spacing)."""
 
-    def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode):
+    def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode,
+                 step_width: float | None = None):
         self.hybrid, self.period = hybrid, period
-        self.leg_length = hybrid.bm.params.leg_length
-        self.step_length, self.alpha, self.mode = step_length, alpha, mode
+        self.configurations = boundary_configurations(hybrid.bm)
+        self.n = hybrid.bm.nq
+        self.step_length, self.alpha, self.mode, self.step_width = step_length, alpha, mode, step_width
         self.evaluations = 0
 
     def ends(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
         """q(0) and q(T) at trunk pitch ``theta`` (rad)."""
-        return boundary_configurations(self.step_length, self.leg_length, self.alpha, self.mode, theta)
+        return self.configurations(self.step_length, self.alpha, self.mode, theta, self.step_width)
 
     def __call__(self, flow: BallisticFlow, u: np.ndarray, with_theta: bool, jacobian: bool,
                  keep_nodes: bool = False) -> tuple[np.ndarray, np.ndarray | None, FlowResult]:
-        """F (9 or 10), dF/du when ``jacobian`` (else None), and the flow's result."""
-        n_unknown = 10 if with_theta else 9
-        theta = u[9]
+        """F (nq or nq + 1), dF/du when ``jacobian`` (else None), and the flow's result."""
+        n = self.n
+        n_unknown = n + 1 if with_theta else n
+        theta = u[n]
         q0, q_t = self.ends(theta)
         seeds = None
         if jacobian:
-            seeds = np.zeros((18, n_unknown))
-            seeds[9:, :9] = np.eye(9)
+            seeds = np.zeros((2 * n, n_unknown))
+            seeds[n:, :n] = np.eye(n)
             if with_theta:
-                seeds[:9, 9] = THETA_DIRECTION
+                d0, d_t = self.configurations.theta_derivatives(self.step_length, self.alpha, self.mode, theta,
+                                                                self.step_width)
+                seeds[:n, n] = d0
         with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected and reported
-            res = flow.propagate(q0, u[:9], self.period, seeds, keep_nodes)
+            res = flow.propagate(q0, u[:n], self.period, seeds, keep_nodes)
         self.evaluations += res.evaluations
         f = res.q - q_t
         impact = self.hybrid.impact(q_t) if with_theta else None
         if with_theta:
-            f = np.append(f, impact.closure_gap(u[:9], res.qd))
+            f = np.append(f, impact.closure_gap(u[:n], res.qd))
         if not jacobian:
             return f, None, res
         jac = np.zeros((n_unknown, n_unknown))
-        jac[:9] = res.sens[:9]
+        jac[:n] = res.sens[:n]
         if with_theta:
-            jac[:9, 9] -= THETA_DIRECTION
+            jac[:n, n] -= d_t
             d_a, d_b = impact.closure_gradients()
-            jac[9, :9] = d_a + d_b @ res.sens[9:, :9]
+            jac[n, :n] = d_a + d_b @ res.sens[n:, :n]
             # The gap's explicit dependence on theta through the configuration q_T(theta) is a
             # smooth algebraic function: a central difference resolves it to ~1e-10 relative.
             h = 1e-6
-            gap = lambda th: self.hybrid.impact(self.ends(th)[1]).closure_gap(u[:9], res.qd)  # noqa: E731
-            jac[9, 9] = (gap(theta + h) - gap(theta - h)) / (2 * h) + d_b @ res.sens[9:, 9]
+            gap = lambda th: self.hybrid.impact(self.ends(th)[1]).closure_gap(u[:n], res.qd)  # noqa: E731
+            jac[n, n] = (gap(theta + h) - gap(theta - h)) / (2 * h) + d_b @ res.sens[n:, n]
         return f, jac, res
 
     def newton_residual(self, flow: BallisticFlow, u: np.ndarray, with_theta: bool) -> newton.NewtonResidual:
         """F as the Newton solver takes it, over the free unknowns (qd(0), and theta if free);
-        a fixed theta is ``u[9]``."""
-        n = 10 if with_theta else 9
+        a fixed theta is ``u[nq]``."""
+        n = self.n + 1 if with_theta else self.n
 
         def fun(x: np.ndarray, jacobian: bool):
             full = u.copy()
@@ -117,6 +122,7 @@ def solve_bvp(
     guess: tuple[np.ndarray, float] | None = None,
     settings: Settings = DEFAULTS,
     coarse: BallisticFlow | None = None,
+    step_width: float | None = None,
 ) -> BvpSolution:
     """Solve the shooting problem on ``flow``'s grid; ``guess`` = (qd(0), theta) warm-starts it.
 
@@ -129,19 +135,21 @@ def solve_bvp(
     finished on ``flow``'s grid by chord steps with the coarse Jacobian, which the two grids
     share to within the coarse grid's error; if that stalls, Newton continues on the fine grid.
     ``settings.tolerance`` bounds the end-point residual (rad) and the closure gap (kg m^2/s).
+    ``step_width`` (m) places the feet (None: the hips' spacing).
     """
     if closure not in CLOSURES:
         raise ValueError(f"unknown closure {closure!r}: use 'theta' or 'slack'")
     with_theta = closure == "theta"
-    n = 10 if with_theta else 9
+    system = ShootingProblem(hybrid, step_length, period, arm_amplitude, mode, step_width)
+    nq = system.n
+    n = nq + 1 if with_theta else nq
     tol, max_iter = settings.tolerance, settings.max_iterations
-    system = ShootingProblem(hybrid, step_length, period, arm_amplitude, mode)
     newton_flow = coarse or flow
     # On the coarse grid, converging further than its own discretization error gains nothing.
     newton_tol = max(tol, settings.coarse_tolerance) if coarse is not None else tol
 
     def run_newton(u: np.ndarray, free_theta: bool, on: BallisticFlow, bound: float):
-        k = 10 if free_theta else 9
+        k = nq + 1 if free_theta else nq
         result = newton.newton(system.newton_residual(on, u, free_theta), u[:k], bound, max_iter)
         u = u.copy()
         u[:k] = result.x
@@ -189,7 +197,8 @@ def _solution(system: ShootingProblem, flow: BallisticFlow, u: np.ndarray, with_
     """Package the outcome; ``res`` is the fine-grid flow at ``u`` if already computed."""
     if res is None or res.nodes is None:
         _, _, res = system(flow, u, with_theta, False, keep_nodes=True)
-    theta = float(u[9]) if with_theta else 0.0
+    n = system.n
+    theta = float(u[n]) if with_theta else 0.0
     q0, q_t = system.ends(theta)
     finite = np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.qd))
     return BvpSolution(
@@ -199,10 +208,10 @@ def _solution(system: ShootingProblem, flow: BallisticFlow, u: np.ndarray, with_
         theta=theta,
         q0=q0,
         q_target=q_t,
-        qd_a=u[:9].copy(),
+        qd_a=u[:n].copy(),
         qd_b=res.qd.copy(),
         end_residual=float(np.max(np.abs(res.q - q_t))) if finite else math.inf,
-        closure_gap=system.hybrid.impact(q_t).closure_gap(u[:9], res.qd) if finite else math.inf,
+        closure_gap=system.hybrid.impact(q_t).closure_gap(u[:n], res.qd) if finite else math.inf,
         evaluations=system.evaluations,
         nodes=res.nodes,
     )

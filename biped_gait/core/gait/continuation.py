@@ -20,28 +20,35 @@ from ..dynamics.flow import BallisticFlow
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import Settings
 
-MAX_STEP = 1.0  # grid spacings of the atlas (0.025 m, 0.025 s, 5 deg) per continuation step
+MAX_STEP = 1.0  # grid spacings of the atlas (0.025 m, 0.025 s, 5 deg; 0.05 m of step width) per continuation step
 MIN_STEP = 1.0 / 64.0  # below this the path is given up
 BRANCH_JUMP = 2.0  # rad/s: a larger change of qd(0) in one step is a jump to another branch
 STEP_ITERATIONS = 12  # Newton iterations of one step: from a close warm start it needs 2 to 8
 EXTRA_ATTEMPTS = 24  # failed (halved) steps allowed on a path, beyond one per grid spacing
 SPACING = np.array([0.025, 0.025, math.radians(5.0)])  # m, s, rad
+WIDTH_SPACING = 0.05  # m of step width
 
 
-def path_length(start: tuple[float, float, float], target: tuple[float, float, float]) -> float:
-    """Distance from ``start`` to ``target`` (L m, T s, alpha rad) in grid spacings."""
-    return float(np.linalg.norm((np.asarray(target) - np.asarray(start)) / SPACING))
+def path_length(start: tuple[float, float, float], target: tuple[float, float, float],
+                widths: tuple[float, float] | None = None) -> float:
+    """Distance from ``start`` to ``target`` (L m, T s, alpha rad) in grid spacings; ``widths``:
+    the step widths (m) at both ends, when they differ."""
+    length = float(np.linalg.norm((np.asarray(target) - np.asarray(start)) / SPACING))
+    return length if widths is None else math.hypot(length, (widths[1] - widths[0]) / WIDTH_SPACING)
 
 
 def continue_to(hybrid: HybridStep, flow: BallisticFlow, mode: GaitMode, closure: str, settings: Settings,
                 start: tuple[float, float, float], guess: tuple[np.ndarray, float],
-                target: tuple[float, float, float]) -> tuple[np.ndarray, float] | None:
+                target: tuple[float, float, float], step_width: float | None = None) -> tuple[np.ndarray, float] | None:
     """A warm start at ``target`` (L m, T s, alpha rad) reached from the gait ``guess`` =
     (qd(0), theta) at ``start``; None if the path cannot be followed (a step below
     ``MIN_STEP`` fails, or the steps exceed their budget). ``flow`` is the grid the steps are
-    solved on (the coarse one)."""
+    solved on (the coarse one). ``step_width`` (m): the target's, reached along the same path
+    from the hips' spacing, where ``guess`` is (None: the hips' spacing throughout)."""
     start_a, target_a = np.asarray(start, float), np.asarray(target, float)
-    length = path_length(start, target)
+    spacing = hybrid.bm.params.hip_spacing
+    widths = None if step_width is None or step_width == spacing else (spacing, step_width)
+    length = path_length(start, target, widths)
     if length == 0.0:
         return guess
     coarse = replace(settings, tolerance=max(settings.tolerance, settings.coarse_tolerance),
@@ -57,7 +64,9 @@ def continue_to(hybrid: HybridStep, flow: BallisticFlow, mode: GaitMode, closure
         L, T, alpha = start_a + s_next * (target_a - start_a)
         if not (0.0 < L < 2 * hybrid.bm.params.leg_length and T > 0 and 0 <= alpha < math.pi / 2):
             return None
-        step = solve_bvp(hybrid, flow, float(L), float(T), float(alpha), mode, closure, (qd, theta), coarse)
+        width = None if widths is None else spacing + s_next * (step_width - spacing)
+        step = solve_bvp(hybrid, flow, float(L), float(T), float(alpha), mode, closure, (qd, theta), coarse,
+                         step_width=width)
         if step.converged and np.max(np.abs(step.qd_a - qd)) <= BRANCH_JUMP:
             s, qd, theta = s_next, step.qd_a, step.theta
             ds = min(2.0 * ds, MAX_STEP / length)

@@ -64,9 +64,9 @@ class StepFigures:
     min_grf_z: float
     min_swing_height: float
     max_friction_ratio: float
-    q3_range: tuple[float, float]
-    q5_range: tuple[float, float]
-    q9_min: float
+    q3_range: tuple[float, float]  # rad, the stance knee (q3 of the paper's nine coordinates)
+    q5_range: tuple[float, float]  # rad, the torso yaw (q5)
+    q9_min: float  # rad, the least swing-knee angle (q9)
     energy_drift: float
     min_late_swing_height: float  # m, on [0.95 T, T): where the swing tip comes down to the ground
     swing_arrival_speed: float  # m/s, the swing tip's vertical velocity at the touchdown (T-)
@@ -83,6 +83,8 @@ def step_figures(
     call: ground reaction, swing clearance on (0.05 T, 0.95 T) and on [0.95 T, T), the swing
     tip's vertical velocity at the last sample (the touchdown, t = T), friction ratio, joint
     ranges, yaw momentum, and the integration's energy ``drift``."""
+    bm = samples.bm
+    knee, torso, swing_knee = bm.index("knee"), bm.index("torso_yaw", ""), bm.index("knee", "swing")
     evaluated = samples.dynamics(q, qd)
     grf = evaluated.grf
     interior = (t > 0.05 * period) & (t < 0.95 * period)
@@ -98,9 +100,9 @@ def step_figures(
         min_grf_z=float(fz.min()),
         min_swing_height=float(heights.min()),
         max_friction_ratio=float(ratio.max()),
-        q3_range=(float(q[:, 2].min()), float(q[:, 2].max())),
-        q5_range=(float(q[:, 4].min()), float(q[:, 4].max())),
-        q9_min=float(q[:, 8].min()),
+        q3_range=(float(q[:, knee].min()), float(q[:, knee].max())),
+        q5_range=(float(q[:, torso].min()), float(q[:, torso].max())),
+        q9_min=float(q[:, swing_knee].min()),
         energy_drift=drift,
         min_late_swing_height=float(late.min()) if late.size else math.inf,
         swing_arrival_speed=float(arrival[0]),

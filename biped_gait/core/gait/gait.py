@@ -18,6 +18,7 @@ from .admissibility import Verdict, failure_message
 from .bvp import BvpSolution
 from .configurations import GaitMode
 from ..dynamics.impulses import EffortOptions, ImpulseSolution
+from ..model.biped import CoordinateNames
 from .figures import StepFigures
 from .stability import Multipliers
 
@@ -26,7 +27,8 @@ from .stability import Multipliers
 class GaitProblem:
     """A validated gait request: L (m), T (s), alpha (rad), mode, parameter set name, closure
     (``theta``/``slack``), effort (``l1``/``l2``) and how the impulses are chosen (friction
-    coefficient, joint-rate bound in rad/s, the effort's reading)."""
+    coefficient, joint-rate bound in rad/s, the effort's reading), step width (m, between the
+    feet) and turn radius (m, signed: positive turns left; inf: straight)."""
 
     step_length: float
     period: float
@@ -35,7 +37,9 @@ class GaitProblem:
     params: str
     closure: str
     effort: str
-    options: EffortOptions = EffortOptions()
+    options: EffortOptions
+    step_width: float
+    turn_radius: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -64,12 +68,19 @@ class DoubleSupport:
     new_stance_tip_speed_after: float
     impulse_friction_ratios: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     max_intermediate_joint_rate: float = math.nan
+    heading_change: float = 0.0  # rad: the next step's frame relative to this one's, mirrored (docs/model.md 5.2)
+
+    @property
+    def yaw_momentum_jump(self) -> float:
+        """|H(T+) - H(T-)| about the vertical through the new stance foot (kg m^2/s): what the
+        impulses change in the yaw angular momentum, on one fixed axis."""
+        return abs(self.h_t_plus[1] - self.h_t_minus[1])
 
 
 @dataclass(frozen=True)
 class Gait:
-    """A solved gait: ``step`` always; ``double_support`` and ``figures`` when the BVP
-    converged; the ``verdict``; the solve's wall time (s); how it was ``found`` (``guess``: from
+    """A solved gait of a model whose vectors are ``names``: ``step`` always; ``double_support``
+    and ``figures`` when the BVP converged; the ``verdict``; the solve's wall time (s); how it was ``found`` (``guess``: from
     the caller's warm start, ``atlas``: from the atlas's interpolated warm start,
     ``continuation``: by continuation from the nearest admissible gait, ``cold``: from the
     straight-line start); and, when it is not admissible, a ``hint`` of where admissible gaits are;
@@ -77,6 +88,7 @@ class Gait:
     was solved)."""
 
     problem: GaitProblem
+    names: CoordinateNames
     step: BvpSolution
     double_support: DoubleSupport | None
     figures: StepFigures | None
@@ -122,3 +134,39 @@ class Gait:
         figures = self.figures.without_samples() if self.figures is not None else None
         return replace(self, step=replace(self.step, nodes=None), figures=figures)
 
+
+
+@dataclass(frozen=True)
+class Stride:
+    """A gait on a circle of radius ``radius`` (m, signed: positive turns left): a stride of two
+    steps, A on the right foot and B on the left (each a ``Gait`` in its own model coordinates,
+    without stability of its own), periodic modulo a yaw rotation of ``heading_change`` (rad);
+    the open-loop multipliers of the stride's Poincare map (both steps, their impulses held
+    fixed); the solve's wall time (s), how it was ``found`` (``continuation`` in curvature from
+    the straight gait, ``atlas``, ``guess``), and, when it is not admissible, a ``hint``."""
+
+    radius: float
+    steps: tuple[Gait, Gait]
+    stability: Multipliers | None
+    solve_time_s: float
+    found: str
+    hint: str = ""
+
+    problem = property(lambda self: self.steps[0].problem, doc="the request (step A's)")
+    converged = property(lambda self: all(s.converged for s in self.steps))
+    admissible = property(lambda self: all(s.admissible for s in self.steps))
+
+    @property
+    def reasons(self) -> tuple[str, ...]:
+        return tuple(f"step {name} ({foot} foot): {reason}" for (name, foot), step in
+                     zip((("A", "right"), ("B", "left")), self.steps) for reason in step.reasons)
+
+    @property
+    def W(self) -> float:
+        """The effort of the stride's two double supports (N m s)."""
+        return float(sum(s.W for s in self.steps))
+
+    @property
+    def heading_change(self) -> float:
+        """The heading change per stride (rad, signed): 2 L / R."""
+        return 2 * self.problem.step_length / self.radius

@@ -24,19 +24,23 @@ from .admissibility import judge
 from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
-from .continuation import continue_to
+from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
 from ..dynamics.flow import hermite_samples
-from .gait import DoubleSupport, Gait, GaitProblem
+from .gait import DoubleSupport, Gait, GaitProblem, Stride
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.impulses import EFFORTS, EffortOptions, friction_ratios, solve_impulses
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params
 from .figures import StepFigures, energy_drift, step_figures
 from ..dynamics.settings import DEFAULTS, Settings
-from .stability import open_loop
+from .stability import PoincareMap, multipliers_of, open_loop
+from .stride import solve_stride
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
 BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm start left the branch
+CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride's continuation
+MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
+StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, qd_B(0), theta_2)
 
 
 @dataclass(frozen=True)
@@ -45,7 +49,9 @@ class GaitRequest:
     ``GaitMode`` or its name, parsed here), parameter set (name or file; empty: the planner's),
     closure (``theta``/``slack``), effort (``l1``/``l2``); the impulses' friction coefficient
     (None: the parameter set's; inf: no cone), the bound on the double support's joint rates
-    (rad/s; inf: none) and the effort's reading (``joint``/``absolute``)."""
+    (rad/s; inf: none), the effort's reading (``joint``/``absolute``), the step width (m, between
+    the feet; None: the hips' spacing) and the turn radius (m, signed: positive turns left; inf:
+    straight; a finite one is a stride, ``GaitPlanner.plan_stride``)."""
 
     step_length: float
     period: float
@@ -57,6 +63,8 @@ class GaitRequest:
     friction: float | None = None
     rate_bound: float = math.inf
     effort_coordinates: str = "joint"
+    step_width: float | None = None
+    turn_radius: float = math.inf
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "mode", GaitMode.parse(self.mode))
@@ -95,7 +103,53 @@ def validate_request(request: GaitRequest, params: BipedParams) -> GaitProblem:
         raise ValueError(f"unknown effort {request.effort!r}: use 'l1' or 'l2'")
     friction = params.friction if request.friction is None else _number("friction coefficient", request.friction)
     options = EffortOptions(friction, _number("joint-rate bound", request.rate_bound), request.effort_coordinates)
-    return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort, options)
+    width = validate_step_width(request.step_width, params)
+    radius = validate_turn_radius(request.turn_radius, params)
+    if math.isfinite(radius) and (width != params.hip_spacing or request.closure != "theta"):
+        raise ValueError("a gait on a circle has its feet at the hips' spacing (turned) and the theta closure")
+    return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort, options,
+                       width, radius)
+
+
+def validate_turn_radius(turn_radius: float, params: BipedParams) -> float:
+    """The turn radius (m) of a request: inf (straight), or finite beyond the hips' half spacing
+    with hip roll and yaw joints; ``ValueError`` otherwise."""
+    radius = _number("turn radius", turn_radius)
+    if math.isnan(radius) or radius == 0:
+        raise ValueError(f"turn radius must be a non-zero number of metres (inf: straight), got {radius:g}")
+    if math.isinf(radius):
+        return math.inf
+    if not params.joints.lateral_hips:
+        raise ValueError(f"parameter set {params.name} walks straight only: walking on a circle needs hip roll and "
+                         "yaw joints (e.g. aoustin2013-hips)")
+    if abs(radius) <= params.hip_half_width:
+        raise ValueError(f"turn radius must exceed the hips' half spacing ({params.hip_half_width:g} m), "
+                         f"got {radius:g} m")
+    return radius
+
+
+STEP_WIDTH_SPAN = 0.5
+"""Step widths a model with lateral hip joints walks at: the hips' spacing within this fraction
+of it (0.2 to 0.6 m for the shipped sets)."""
+
+
+def validate_step_width(step_width: float | None, params: BipedParams) -> float:
+    """The step width (m) of a request (None: the hips' spacing); ``ValueError`` outside the
+    range the model can walk."""
+    spacing = params.hip_spacing
+    if step_width is None:
+        return spacing
+    width = _finite("step width", step_width)
+    if width == spacing:
+        return width
+    if not params.joints.lateral_hips:
+        raise ValueError(f"parameter set {params.name} walks with its feet at the hips' spacing ({spacing:g} m) only: "
+                         f"a step width of {width:g} m needs hip roll and yaw joints (e.g. aoustin2013-hips)")
+    low, high = spacing * (1 - STEP_WIDTH_SPAN), spacing * (1 + STEP_WIDTH_SPAN)
+    if not low <= width <= high:
+        raise ValueError(f"step width must be in [{low:g}, {high:g}] m for parameter set {params.name} "
+                         f"(its hips' spacing {spacing:g} m +- {STEP_WIDTH_SPAN:.0%}), got {width:g} m")
+    return width
 
 
 class GaitPlanner:
@@ -152,12 +206,72 @@ class GaitPlanner:
         if request.params and request.params != self.params.name:
             raise ValueError(f"this planner holds parameter set {self.params.name!r}, not {request.params!r}")
         problem = validate_request(request, self.params)
+        if math.isfinite(problem.turn_radius):
+            raise ValueError("a gait on a circle is a stride of two steps: plan it with plan_stride")
         start = time.perf_counter()
         if guess is not None or cold:
             gait = self._solve(problem, guess, "guess" if guess is not None else "cold")
         else:
             gait = self._find(problem)
         return replace(gait, solve_time_s=time.perf_counter() - start)
+
+    def plan_stride(self, request: GaitRequest, guess: StrideGuess | None = None) -> Stride:
+        """Solve one gait on a circle (``request.turn_radius`` finite): a stride of two steps
+        (docs/model.md section 4.9). ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) of a nearby
+        stride warm-starts it; without one the stride is reached from the straight gait at the
+        same (L, T, alpha, mode) by continuation in the curvature 1 / R. ``ValueError`` for an
+        invalid request; a stride that cannot be reached is returned not converged, with the
+        smallest radius the continuation reached in its ``hint``."""
+        problem = validate_request(request, self.params)
+        if not math.isfinite(problem.turn_radius):
+            raise ValueError("a straight gait is one step: plan it with plan")
+        start = time.perf_counter()
+        found, reached = "guess", problem.turn_radius
+        if guess is None:
+            straight = self.plan(replace(request, turn_radius=math.inf))
+            if not straight.converged:
+                raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
+            found, (guess, reached) = "continuation", self._curvature_path(problem, straight)
+        solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
+                                problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow)
+        a, b = solution.steps
+        steps = (self.step_gait(problem, a, found, b.qd_a), self.step_gait(problem, b, found, a.qd_a))
+        stability = None
+        if all(g.double_support is not None and g.double_support.impulses.success for g in steps):
+            maps = [PoincareMap(self.hybrid, self.flow, problem.period, g.double_support.impulses.i_minus,
+                                g.double_support.impulses.i_plus) for g in steps]
+            jacobians = [m.jacobian(np.concatenate([g.step.q0, g.step.qd_a])) for m, g in zip(maps, steps)]
+            stability = multipliers_of(jacobians[1] @ jacobians[0])
+        stride = Stride(problem.turn_radius, steps, stability, math.nan, found)
+        if not stride.admissible:
+            where = f"L = {problem.step_length:g} m, T = {problem.period:g} s, alpha = {math.degrees(problem.arm_amplitude):g} deg"
+            stride = replace(stride, hint=f"smallest turn radius reached from the straight gait at {where}: "
+                                          f"{abs(reached):.3g} m")
+        return replace(stride, solve_time_s=time.perf_counter() - start)
+
+    def _curvature_path(self, problem: GaitProblem, straight: Gait) -> tuple[StrideGuess, float]:
+        """From the straight gait to the stride of radius R: continuation in the curvature 1 / R,
+        each step on the coarse grid warm-started from the last, halved where it fails or jumps
+        (``continuation.BRANCH_JUMP``); the last stride reached and its radius (m)."""
+        target = 1.0 / problem.turn_radius
+        guess = (straight.qd_a, straight.theta, straight.qd_a, straight.theta)
+        coarse = replace(self.settings, tolerance=max(self.settings.tolerance, self.settings.coarse_tolerance),
+                         max_iterations=STEP_ITERATIONS)
+        flow = self.coarse_flow or self.flow
+        curvature, step = 0.0, min(1.0, CURVATURE_STEP / abs(target))
+        while curvature != target and step * abs(target) >= MIN_CURVATURE_STEP:
+            trial = curvature + step * target
+            if (trial - target) * target > 0:
+                trial = target
+            solution = solve_stride(self.hybrid, flow, problem.step_length, problem.period, problem.arm_amplitude,
+                                    problem.mode, 1.0 / trial, guess, coarse)
+            a, b = solution.steps
+            if solution.converged and max(np.max(np.abs(a.qd_a - guess[0])), np.max(np.abs(b.qd_a - guess[2]))) <= BRANCH_JUMP:
+                curvature, guess = trial, (a.qd_a, a.theta, b.qd_a, b.theta)
+                step = min(2.0 * step, CURVATURE_STEP / abs(target))
+            else:
+                step *= 0.5
+        return guess, (1.0 / curvature if curvature else math.inf)
 
     def _find(self, problem: GaitProblem) -> Gait:
         """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold."""
@@ -174,7 +288,7 @@ class GaitPlanner:
         origin = self._origin(problem, atlas)
         if origin is not None:
             guess = continue_to(self.hybrid, self.coarse_flow or self.flow, problem.mode, problem.closure, self.settings,
-                                origin[0], origin[1], point)
+                                origin[0], origin[1], point, problem.step_width)
             if guess is not None:
                 gait = self._solve(problem, guess, "continuation")
                 if gait.converged and (gait.admissible or first is None):
@@ -203,23 +317,32 @@ class GaitPlanner:
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
         """The gait of ``problem`` solved from ``guess`` (None: the straight-line start)."""
         step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
-                         problem.mode, problem.closure, guess, self.settings, self.coarse_flow)
+                         problem.mode, problem.closure, guess, self.settings, self.coarse_flow, problem.step_width)
+        gait = self.step_gait(problem, step, found)
+        if gait.double_support is not None and gait.double_support.impulses.success:
+            impulses = gait.double_support.impulses
+            gait = replace(gait, stability=open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
+                                                     impulses.i_minus, impulses.i_plus))
+        return gait
+
+    def step_gait(self, problem: GaitProblem, step: BvpSolution, found: str,
+                  next_qd_a: np.ndarray | None = None) -> Gait:
+        """The gait of one solved ballistic step: its double support towards ``next_qd_a`` (the next
+        step's initial velocity, its own coordinates; default the step's own: a periodic gait), its
+        figures and the verdict; no stability."""
         double_support = figures = None
         if step.converged:
-            double_support = self._double_support(step, problem)
+            double_support = self._double_support(step, problem, step.qd_a if next_qd_a is None else next_qd_a)
             figures = self._figures(step, problem.period)
-        verdict = judge(step, double_support.impulses if double_support else None, figures, problem.options.friction)
-        stability = None
-        if double_support is not None and double_support.impulses.success:
-            stability = open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
-                                  double_support.impulses.i_minus, double_support.impulses.i_plus)
-        return Gait(problem, step, double_support, figures, verdict, math.nan, found, stability=stability)
+        verdict = judge(step, double_support.impulses if double_support else None, figures, problem.options.friction,
+                        self.params.joints.role("knee").limits.lower)
+        return Gait(problem, self.model.coordinate_names, step, double_support, figures, verdict, math.nan, found)
 
-    def _double_support(self, step: BvpSolution, problem: GaitProblem) -> DoubleSupport:
+    def _double_support(self, step: BvpSolution, problem: GaitProblem, next_qd_a: np.ndarray) -> DoubleSupport:
         bm = self.model
         q_t = step.q_target
         impact = self.hybrid.impact(q_t)
-        lp = impact.problem(step.qd_b, step.qd_a)
+        lp = impact.problem(step.qd_b, next_qd_a)
         slack = 0.0
         if problem.closure == "slack":
             # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
@@ -233,7 +356,7 @@ class GaitPlanner:
         if sol.success:
             vz_before = float(lp.j2[2] @ sol.xd_minus)
             vz_after = float(lp.j1[2] @ sol.xd_plus)
-            speed_after = float(np.linalg.norm(lp.j2 @ xd_a))
+            speed_after = float(np.linalg.norm(lp.j2[:3] @ xd_a))
         return DoubleSupport(
             impulses=sol,
             xd_b=xd_b,
@@ -245,8 +368,9 @@ class GaitPlanner:
             swing_tip_vz_before_impact=vz_before,
             old_stance_tip_vz_after_impact=vz_after,
             new_stance_tip_speed_after=speed_after,
-            impulse_friction_ratios=friction_ratios(sol.x),
-            max_intermediate_joint_rate=float(np.max(np.abs(np.concatenate([sol.xd_minus[5:], sol.xd_plus[5:]])))),
+            impulse_friction_ratios=friction_ratios(sol),
+            max_intermediate_joint_rate=float(np.max(np.abs(sol.joint_rates))),
+            heading_change=self.hybrid.exchange.heading(q_t),
         )
 
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:

@@ -1,8 +1,8 @@
 """Stability of a periodic gait: the Poincare map of the hybrid step and its Floquet multipliers
 (docs/model.md section 8).
 
-Section: just after the double support, the state x = (q, qd) (rad, rad/s) of a step's start in
-its own model coordinates. The open-loop map P(x): the ballistic flow from x until the
+Section: just after the double support, the state x = (q, qd) (rad, rad/s, 2 nq numbers) of a
+step's start in its own model coordinates. The open-loop map P(x): the ballistic flow from x until the
 touchdown guard fires (swing-tip height w(q) = 0 at time tau(x)), then the double support with
 the gait's joint impulses I-, I+ held fixed (eqs. 6-10 run forward), then the leg exchange.
 The gait's start x* is a fixed point, P(x*) = x*.
@@ -12,7 +12,7 @@ variational equations (the BVP's RK8 grid), the guard's saltation (the touchdown
 d tau = -(grad w . dq(T)) / (grad w . qd(T))), and the reset's derivative (linear in the
 velocity; its configuration dependence through D_e, J1, J2 by central differences, an
 algebraic map). The multipliers are its eigenvalues; the gait is open-loop stable if all lie
-inside the unit circle. One of the 18 is zero by construction (a perturbation along the flow
+inside the unit circle. One of the 2 nq is zero by construction (a perturbation along the flow
 reaches the same touchdown: the guard removes it); the rest describe how a small perturbation
 grows or decays from one step to the next.
 """
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics.flow import BallisticFlow
-from ..dynamics.hybrid import HybridStep, exchange
+from ..dynamics.hybrid import HybridStep
 
 FD_STEP = 1e-6  # rad: central differences of the reset's configuration dependence
 
@@ -75,31 +75,36 @@ class PoincareMap:
 
     def reset(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The next step's start (q', qd') from the pre-impact state, the impulses held fixed."""
-        return np.concatenate([exchange(q), self.hybrid.impact(q).forward(qd, self.i_minus, self.i_plus)])
+        return np.concatenate([self.hybrid.exchange.configuration(q),
+                               self.hybrid.impact(q).forward(qd, self.i_minus, self.i_plus)])
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
-        """P(x): one step of the hybrid system from the start x = (q, qd) (18,)."""
-        _, q, qd = self.touchdown(x[:9], x[9:])
+        """P(x): one step of the hybrid system from the start x = (q, qd) (2 nq,)."""
+        n = self.hybrid.bm.nq
+        _, q, qd = self.touchdown(x[:n], x[n:])
         return self.reset(q, qd)
 
     def jacobian(self, x: np.ndarray) -> np.ndarray:
-        """dP/dx at the fixed point x (18 x 18): variational flow, saltation, reset derivative."""
-        q0, qd0 = x[:9], x[9:]
-        run = self.flow.propagate(q0, qd0, self.period, np.eye(18))
+        """dP/dx at the fixed point x (2 nq x 2 nq): variational flow, saltation, reset derivative."""
+        bm = self.hybrid.bm
+        n = bm.nq
+        q0, qd0 = x[:n], x[n:]
+        run = self.flow.propagate(q0, qd0, self.period, np.eye(2 * n))
         q, qd, phi = run.q, run.qd, run.sens
         qdd = self.flow.acceleration(q, qd)
-        grad = self.hybrid.bm.tip_jacobians(q)[1][2, 3:]  # d w / d q (m/rad)
-        dtau = -(grad @ phi[:9]) / (grad @ qd)  # d tau / d x (s per unit of x)
+        grad = bm.tip_jacobians(q)[1][2, bm.ds_of_single]  # d w / d q (m/rad)
+        dtau = -(grad @ phi[:n]) / (grad @ qd)  # d tau / d x (s per unit of x)
         pre = phi + np.outer(np.concatenate([qd, qdd]), dtau)  # d x(tau) / d x(0)
         return self._reset_jacobian(q, qd) @ pre
 
     def _reset_jacobian(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """d reset / d (q, qd) (18 x 18): the velocity part exactly (the reset is linear in qd),
-        the configuration part by central differences."""
-        out = np.zeros((18, 18))
-        out[9:, 9:] = self.hybrid.impact(q).forward(np.eye(9), np.zeros(7), np.zeros(7))
-        for j in range(9):
-            step = np.zeros(9)
+        """d reset / d (q, qd) (2 nq x 2 nq): the velocity part exactly (the reset is linear in
+        qd), the configuration part by central differences."""
+        n, na = len(q), len(self.i_minus)
+        out = np.zeros((2 * n, 2 * n))
+        out[n:, n:] = self.hybrid.impact(q).forward(np.eye(n), np.zeros(na), np.zeros(na))
+        for j in range(n):
+            step = np.zeros(n)
             step[j] = FD_STEP
             out[:, j] = (self.reset(q + step, qd) - self.reset(q - step, qd)) / (2 * FD_STEP)
         return out
@@ -116,18 +121,19 @@ def open_loop(hybrid: HybridStep, flow: BallisticFlow, period: float, q0: np.nda
 def closed_loop(walker_factory, x: np.ndarray, step: float = 1e-7) -> Multipliers:
     """The closed-loop multipliers: of the map the walker applies from a step's start (q, qd)
     to the next (the impulses re-solved from the actual state, the next step re-aimed), by
-    central differences of steps walked from ``x`` (18,) perturbed by ``step`` (rad, rad/s).
+    central differences of steps walked from ``x`` (2 nq,) perturbed by ``step`` (rad, rad/s).
     ``walker_factory(q, qd)`` gives a walker whose current step starts there."""
     def step_map(state: np.ndarray) -> np.ndarray:
-        walker = walker_factory(state[:9], state[9:])
+        n = len(state) // 2
+        walker = walker_factory(state[:n], state[n:])
         outcome = walker.walk_step()
         if outcome.touchdown is None:
             raise ValueError(f"the closed loop fell from a perturbed start: {outcome.fall}")
         return np.concatenate([walker.state.q, walker.state.qd])
 
-    jacobian = np.zeros((18, 18))
-    for j in range(18):
-        e = np.zeros(18)
+    jacobian = np.zeros((len(x), len(x)))
+    for j in range(len(x)):
+        e = np.zeros(len(x))
         e[j] = step
         jacobian[:, j] = (step_map(x + e) - step_map(x - e)) / (2 * step)
     return multipliers_of(jacobian)

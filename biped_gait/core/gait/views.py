@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .gait import Gait
+from .gait import Gait, Stride
 
 NAN = math.nan
 
@@ -24,12 +24,14 @@ NAN = math.nan
 @dataclass(frozen=True)
 class Field:
     """One flat figure of a gait: its JSON key, how to read it, and its ``GaitPlan`` field
-    (``msg``; None: not in the message) with the message's fixed array size (``size``) or
-    ``vector`` for a geometry_msgs/Vector3."""
+    (``msg``; None: not in the message): a float64[] of the model's size (``array``; empty where
+    the solve produced none), an array of the fixed ``size`` (NaN where the solve produced none)
+    or a geometry_msgs/Vector3 (``vector``)."""
 
     key: str
     read: Callable[[Gait], Any]
     msg: str | None = None
+    array: bool = False
     size: int | None = None
     vector: bool = False
 
@@ -85,6 +87,11 @@ FIELDS: tuple[Field, ...] = (
     Field("friction", lambda g: g.problem.options.friction, "friction"),
     Field("rate_bound", lambda g: g.problem.options.rate_bound, "rate_bound"),
     Field("effort_coordinates", lambda g: g.problem.options.coordinates, "effort_coordinates"),
+    Field("step_width", lambda g: g.problem.step_width, "step_width"),
+    Field("turn_radius", lambda g: g.problem.turn_radius, "turn_radius"),
+    Field("joint_names", lambda g: list(g.names.joints), "joint_names"),
+    Field("actuated_joints", lambda g: list(g.names.actuated), "actuated_joints"),
+    Field("double_support_coordinates", lambda g: list(g.names.double_support), "double_support_coordinates"),
     Field("converged", lambda g: g.converged, "converged"),
     Field("admissible", lambda g: g.admissible, "admissible"),
     Field("message", lambda g: g.message),
@@ -94,19 +101,21 @@ FIELDS: tuple[Field, ...] = (
     Field("theta", lambda g: g.step.theta, "theta"),
     Field("slack", _ds("slack", 0.0), "slack"),
     Field("W", lambda g: g.W, "effort_cost"),
-    Field("I_minus", _impulse("i_minus"), "i_minus", 7),
-    Field("I_plus", _impulse("i_plus"), "i_plus", 7),
+    Field("heading_change", _ds("heading_change"), "heading_change"),
+    Field("I_minus", _impulse("i_minus"), "i_minus", array=True),
+    Field("I_plus", _impulse("i_plus"), "i_plus", array=True),
     Field("IR1_minus", _impulse("ir1_minus"), "ir1_minus", vector=True),
     Field("IR2", _impulse("ir2"), "ir2", vector=True),
     Field("IR2_plus", _impulse("ir2_plus"), "ir2_plus", vector=True),
-    Field("Xd_minus", _impulse("xd_minus"), "xd_minus", 12),
-    Field("Xd_plus", _impulse("xd_plus"), "xd_plus", 12),
-    Field("Xd_a", _ds("xd_a", []), "xd_a", 12),
-    Field("Xd_b", _ds("xd_b", []), "xd_b", 12),
-    Field("qd_a", lambda g: g.step.qd_a, "qd_a", 9),
-    Field("qd_b", lambda g: g.step.qd_b, "qd_b", 9),
-    Field("q0", lambda g: g.step.q0, "q0", 9),
-    Field("qT", lambda g: g.step.q_target, "q_t", 9),
+    Field("reaction_spin_impulses", _impulse("spin_impulses"), "reaction_spin_impulses", array=True),
+    Field("Xd_minus", _impulse("xd_minus"), "xd_minus", array=True),
+    Field("Xd_plus", _impulse("xd_plus"), "xd_plus", array=True),
+    Field("Xd_a", _ds("xd_a", []), "xd_a", array=True),
+    Field("Xd_b", _ds("xd_b", []), "xd_b", array=True),
+    Field("qd_a", lambda g: g.step.qd_a, "qd_a", array=True),
+    Field("qd_b", lambda g: g.step.qd_b, "qd_b", array=True),
+    Field("q0", lambda g: g.step.q0, "q0", array=True),
+    Field("qT", lambda g: g.step.q_target, "q_t", array=True),
     Field("new_stance_foot", _ds("new_stance_foot", [])),
     Field("min_grf_z", _figure("min_grf_z"), "min_grf_z"),
     Field("min_swing_height", _figure("min_swing_height"), "min_swing_height"),
@@ -116,12 +125,13 @@ FIELDS: tuple[Field, ...] = (
     Field("q3_range", _figure("q3_range", [])),
     Field("q5_range", _figure("q5_range", [])),
     Field("q9_min", _figure("q9_min")),
-    Field("H_Tminus", _ds("h_t_minus", []), "h_t_minus", 2),
-    Field("H_Tplus", _ds("h_t_plus", []), "h_t_plus", 2),
+    Field("H_Tminus", _ds("h_t_minus", []), "h_t_minus", size=2),
+    Field("H_Tplus", _ds("h_t_plus", []), "h_t_plus", size=2),
     Field("swing_tip_vz_before_impact", _ds("swing_tip_vz_before_impact", when="solved")),
     Field("old_stance_tip_vz_after_impact", _ds("old_stance_tip_vz_after_impact", when="solved")),
     Field("new_stance_tip_speed_after", _ds("new_stance_tip_speed_after", when="solved")),
-    Field("impulse_friction_ratios", _ds("impulse_friction_ratios", [], when="solved"), "impulse_friction_ratios", 3),
+    Field("impulse_friction_ratios", _ds("impulse_friction_ratios", [], when="solved"), "impulse_friction_ratios",
+          size=3),
     Field("max_intermediate_joint_rate", _ds("max_intermediate_joint_rate", when="solved"),
           "max_intermediate_joint_rate"),
     Field("bvp_iterations", lambda g: g.step.iterations),
@@ -182,11 +192,13 @@ def summary(gait: Gait) -> str:
     if gait.converged and math.isfinite(gait.W):
         fmt = lambda v: "[" + ", ".join(f"{x:8.3f}" for x in v) + "]"  # noqa: E731
         lines += [
-            f"W = {gait.W:.4f} N m s    theta = {deg(gait.theta):.4f} deg"
+            f"W = {gait.W:.4f} N m s    theta = {deg(gait.theta):.4f} deg    step width {gait.problem.step_width:.3f} m"
             + (f"    s = {d['slack']:.6f} rad/s" if d["closure"] == "slack" else ""),
+            f"joint impulses on {', '.join(gait.names.actuated)}:",
             f"I-  (N m s) {fmt(d['I_minus'])}",
             f"I+  (N m s) {fmt(d['I_plus'])}",
-            f"I_R1- {fmt(d['IR1_minus'])}  I_R2 {fmt(d['IR2'])}  I_R2+ {fmt(d['IR2_plus'])}  (N s)",
+            f"I_R1- {fmt(d['IR1_minus'])}  I_R2 {fmt(d['IR2'])}  I_R2+ {fmt(d['IR2_plus'])}  (N s)"
+            + (f"  spin {fmt(d['reaction_spin_impulses'])} (N m s)" if len(d["reaction_spin_impulses"]) else ""),
             f"min vertical GRF {d['min_grf_z']:.2f} N, min swing height {d['min_swing_height'] * 1000:.1f} mm, "
             f"max friction ratio {d['max_friction_ratio']:.3f}",
             f"q3 in [{deg(d['q3_range'][0]):.3f}, {deg(d['q3_range'][1]):.3f}] deg, "
@@ -203,3 +215,40 @@ def summary(gait: Gait) -> str:
                      f"{gait.stability.spectral_radius:.4g}, {'stable' if gait.stability.stable else 'unstable'}")
     lines.append(f"solve time {gait.solve_time_s * 1000:.1f} ms, {d['dynamics_evaluations']} dynamics evaluations")
     return "\n".join(lines)
+
+
+def stride_to_dict(stride: Stride, trajectory: bool = True) -> dict:
+    """A stride's figures (radius m, heading change rad per stride, W N m s per stride and per
+    metre walked, outcome, the stride's open-loop multipliers) and each step's (``to_dict``)."""
+    moduli = np.abs(stride.stability.values) if stride.stability else []
+    return clean({
+        "turn_radius": stride.radius, "heading_change_per_stride": stride.heading_change, "W_per_stride": stride.W,
+        "W_per_metre": stride.W / (2 * stride.problem.step_length), "converged": stride.converged,
+        "admissible": stride.admissible, "reasons": list(stride.reasons), "found": stride.found, "hint": stride.hint,
+        "multiplier_moduli": moduli, "spectral_radius": stride.stability.spectral_radius if stride.stability else NAN,
+        "solve_time_s": stride.solve_time_s, "steps": [to_dict(step, trajectory) for step in stride.steps],
+    })
+
+
+def stride_to_json(stride: Stride, trajectory: bool = True) -> str:
+    """JSON text of ``stride_to_dict``."""
+    return json.dumps(stride_to_dict(stride, trajectory), indent=1)
+
+
+def stride_summary(stride: Stride) -> str:
+    """A readable summary of a stride and of each of its steps."""
+    head = [
+        f"stride on a circle of radius {stride.radius:.3f} m ({'left' if stride.radius > 0 else 'right'} turn): "
+        f"heading change {math.degrees(stride.heading_change):.2f} deg per stride of two steps, found by {stride.found}",
+        f"admissible {stride.admissible}, W = {stride.W:.4f} N m s per stride "
+        f"({stride.W / (2 * stride.problem.step_length):.3f} N s per metre walked)",
+    ]
+    head += [f"  not admissible: {r}" for r in stride.reasons]
+    if stride.hint:
+        head.append(f"  {stride.hint}")
+    if stride.stability is not None:
+        head.append(f"open-loop spectral radius of the stride {stride.stability.spectral_radius:.4g}")
+    head.append(f"solve time {stride.solve_time_s * 1000:.1f} ms")
+    for name, step in zip(("A, right foot", "B, left foot"), stride.steps):
+        head += ["", f"step {name}:", summary(step)]
+    return "\n".join(head)

@@ -1,19 +1,23 @@
 """Physical parameters of the seven-link biped: one description, loaded from a YAML file.
 
-Two sets ship with the package (docs/model.md section 1): ``aoustin2013`` (the default, the paper's
-table with the arm's transverse inertia corrected to a uniform rod's) and
-``aoustin2013-table`` (the table verbatim). A user passes either name, or the path of an
-edited copy. Units are SI: m, kg, kg m^2, m/s^2.
+Three sets ship with the package (docs/model.md section 1): ``aoustin2013`` (the default, the
+paper's table with the arm's transverse inertia corrected to a uniform rod's),
+``aoustin2013-table`` (the table verbatim), both with the paper's nine joints, and
+``aoustin2013-hips`` (the default set with a roll and a yaw joint in each hip). A user passes a
+name, or the path of an edited copy. A file's ``joints`` list is the joint table
+(``joints.joint_table``; the paper's joints when it has none). Units are SI: m, kg, kg m^2,
+m/s^2, rad.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
+from .joints import JointTable, joint_table
 from .text import clip
 from .yaml_files import parse_package_yaml, parse_yaml, read_yaml_text
 
@@ -53,11 +57,17 @@ class BipedParams:
     shoulder_half_width: float
     shoulder_height: float
     friction: float = DEFAULT_FRICTION
+    joints: JointTable = field(default_factory=lambda: joint_table(None, "<paper>"))
 
     @property
     def leg_length(self) -> float:
         """l = l_s + l_t (m): hip to foot tip with the knee straight."""
         return self.shin.length + self.thigh.length
+
+    @property
+    def hip_spacing(self) -> float:
+        """Distance between the hip joints (m), 2 l4: the step width of the paper's gaits."""
+        return 2 * self.hip_half_width
 
     @property
     def total_mass(self) -> float:
@@ -119,7 +129,9 @@ def params_from_dict(raw: object, source: str = "<dict>") -> BipedParams:
     if gravity <= 0:
         raise ValueError(f"parameter file {source}: gravity must be positive, got {gravity}")
     friction = _friction(raw.get("friction", DEFAULT_FRICTION), f"{source}: friction")
-    return BipedParams(name=str(raw.get("name", Path(source).stem)), gravity=gravity, **links, **geo, friction=friction)
+    joints = joint_table(raw.get("joints"), source)
+    return BipedParams(name=str(raw.get("name", Path(source).stem)), gravity=gravity, **links, **geo, friction=friction,
+                       joints=joints)
 
 
 def _friction(value: object, what: str) -> float:

@@ -7,10 +7,11 @@ pivot, so the push changes the generalized velocity of the 9-DOF model by
 
     delta_qd = D(q)^-1 J_trunk(q)^T P_model
 
-with D the single-support inertia matrix and J_trunk the 3 x 9 Jacobian of the trunk's CoM
+with D the single-support inertia matrix and J_trunk the 3 x nq Jacobian of the trunk's CoM
 (model frame, stance tip at the origin); the ground supplies whatever impulse at the stance
-tip keeps it in place. With the left foot in stance the model is the world's mirror image, so
-P_model = M P with M = diag(1, -1, 1) (``hybrid.mirror_for``). The configuration does not jump.
+tip keeps it in place. P_model = A^T P with A the step's model axes in the world
+(``exchange.world_axes``: the mirror M = diag(1, -1, 1) with the left foot in stance, turned by
+the walk's heading). The configuration does not jump.
 
 Directions in the horizontal plane are angles (rad) from +x (forward) towards +y (left):
 forward 0, left pi/2, backward pi, right -pi/2.
@@ -24,10 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.hybrid import mirror_for
 from ..model.biped import BipedModel
 
-TRUNK_JOINT = "torso_yaw"  # the trunk hangs on the torso-yaw joint (model.py)
 DIRECTIONS = {"forward": 0.0, "left": math.pi / 2, "backward": math.pi, "right": -math.pi / 2}
 """The named push directions: angle (rad) in the horizontal plane from +x (forward) towards +y."""
 
@@ -76,21 +75,21 @@ class TrunkPush:
     def __init__(self, bm: BipedModel) -> None:
         self.model = bm.single
         self.data = bm.single.createData()
-        self.joint = bm.single.getJointId(TRUNK_JOINT)
+        self.joint = bm.single.getJointId(bm.names[bm.index("torso_yaw")])  # the trunk hangs on it
         # The trunk's CoM in the torso-yaw joint's frame (m): com_offset above the pelvis centre.
         self.com = np.array([0.0, 0.0, bm.params.trunk.com_offset - bm.params.torso_joint_height])
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """J_trunk (3 x 9): d(trunk CoM position, model frame, m) / d qd."""
+        """J_trunk (3 x nq): d(trunk CoM position, model frame, m) / d qd."""
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         frame = pin.getJointJacobian(model, data, self.joint, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
         offset = data.oMi[self.joint].rotation @ self.com  # from the joint to the CoM, world axes
         return frame[:3] - pin.skew(offset) @ frame[3:]
 
-    def velocity_jump(self, q: np.ndarray, impulse: np.ndarray, stance_side: str) -> np.ndarray:
+    def velocity_jump(self, q: np.ndarray, impulse: np.ndarray, axes: np.ndarray) -> np.ndarray:
         """delta_qd (rad/s, model coordinates) of ``impulse`` (N s, world axes) at configuration
-        ``q`` with the ``stance_side`` foot in stance."""
+        ``q`` in a step whose model axes in the world are ``axes`` (``WalkState.axes``)."""
         mass = pin.crba(self.model, self.data, q)
         mass = np.triu(mass) + np.triu(mass, 1).T
-        return np.linalg.solve(mass, self.jacobian(q).T @ (mirror_for(stance_side) @ impulse))
+        return np.linalg.solve(mass, self.jacobian(q).T @ (axes.T @ impulse))

@@ -102,7 +102,7 @@ def walkable_nodes(atlas: Atlas, alpha: float, hybrid: HybridStep, steps: int) -
     an open-loop spectral radius at most ``MAX_RADIUS``, and at each its swing tip comes down
     faster than ``ARRIVAL_MARGIN`` at the touchdown (the step integrated from the node's qd(0)
     and theta on a grid of ``steps``)."""
-    flow, mode, leg = hybrid.flow(steps), atlas.mode, hybrid.bm.params.leg_length
+    flow, mode, ends = hybrid.flow(steps), atlas.mode, boundary_configurations(hybrid.bm)
     out = np.ones(atlas.grid.shape[:2], dtype=bool)
     for k, _ in _alpha_slices(atlas, alpha):
         alpha_k = float(atlas.grid.alphas[k])
@@ -112,7 +112,7 @@ def walkable_nodes(atlas: Atlas, alpha: float, hybrid: HybridStep, steps: int) -
                 out[i, j] = False
                 continue
             length, period = float(atlas.grid.step_lengths[i]), float(atlas.grid.periods[j])
-            q0, _ = boundary_configurations(length, leg, alpha_k, mode, float(atlas.nodes["theta"][i, j, k]))
+            q0, _ = ends(length, alpha_k, mode, float(atlas.nodes["theta"][i, j, k]))
             end = flow.propagate(q0, atlas.nodes["qd_a"][i, j, k], period)
             out[i, j] = hybrid.samples.swing_tip_motion(end.q, end.qd)[1][0] < -ARRIVAL_MARGIN
     return out

@@ -7,12 +7,14 @@ by itself: about 1 % per step at the default gait (closed-loop multiplier 0.99).
 the walker walks on for hundreds of steps at another cadence before it is back on the orbit.
 
 Steering frees one more unknown, the trunk pitch theta' of the next touchdown configuration
-q_T(theta') = q_T + (theta' - theta_p) e_theta (e_theta = ``THETA_DIRECTION``: the pelvis and
-trunk pitch forward, the legs stay), and adds one equation, a feedback law. With, at touchdown k,
+q_T(theta') = q_T + (theta' - theta_p) e_theta (e_theta = the configurations' ``theta_direction``:
+the pelvis and trunk pitch forward, the legs stay), and adds one equation, a feedback law. With,
+at touchdown k,
 
     M_k      the momentum about the foot-to-foot line, z_d^T D_e(q^-) [0; qd^-] (kg m^2/s), which
              the double support keeps into the next step,
-    theta_k  the pelvis pitch q2 + q3 + q4 of the touchdown configuration (rad),
+    theta_k  the pelvis pitch of the touchdown configuration (rad): the sum of the stance leg's
+             pitch coordinates (q2 + q3 + q4 with the paper's nine),
 
 and the gait's M_p and theta_p, linearize the re-aim that aims at the plan's q_T (theta' =
 theta_p): M_{k+1} - M_p = s_k, with
@@ -33,8 +35,8 @@ step gains in one step what the next step from the longer stance loses), which i
 is the unknown freed. rho = 0 is dead-beat (two steps), larger rho spreads the correction and
 asks for smaller pitch changes.
 
-The eleven equations (the nine of the touchdown configuration, the current impact's closure,
-the law) in the eleven unknowns (next initial velocity v, duration tau, pitch theta') are solved
+The nq + 2 equations (the nq of the touchdown configuration, the current impact's closure, the
+law) in the nq + 2 unknowns (next initial velocity v, duration tau, pitch theta') are solved
 by chord steps with the orbit's Jacobian (near the orbit: one or two steps), else by Newton's
 method with the exact Jacobian of the computed flow; where that fails (after a push), by
 continuations (``MomentumSteering.solve``). Where the law cannot be met but the plain re-aim
@@ -48,9 +50,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..dynamics import newton
-from ..gait.configurations import THETA_DIRECTION
 from ..dynamics.flow import BallisticFlow
-from ..dynamics.hybrid import HybridStep, ImpactMap, exchange
+from ..dynamics.hybrid import HybridStep, ImpactMap
+from ..gait.configurations import boundary_configurations
+from ..model.biped import BipedModel
 
 DEFAULT_RATE = 0.25
 """rho: the momentum error's contraction per step (0: dead-beat). Of 0, 0.1, 0.25 and 0.35 at the
@@ -69,9 +72,10 @@ class SteeringFailed(Exception):
     """The steered re-aim has no solution near the state: the message says which stage failed."""
 
 
-def pelvis_pitch(q: np.ndarray) -> float:
-    """q2 + q3 + q4 (rad): the pelvis pitch, theta at a double-support configuration."""
-    return float(q[1] + q[2] + q[3])
+def pelvis_pitch(bm: BipedModel, q: np.ndarray) -> float:
+    """The sum of the stance leg's pitch coordinates, the ankle's, the knee's and the hip's (q2 +
+    q3 + q4 with the paper's nine; rad): the pelvis pitch, theta at a double-support configuration."""
+    return float(q[bm.index("ankle_pitch")] + q[bm.index("knee")] + q[bm.index("hip_pitch")])
 
 
 @dataclass(frozen=True)
@@ -79,7 +83,8 @@ class SteeringReference:
     """The gait the re-aim steers to, linearized on its orbit: touchdown configuration q_T
     (rad), initial and final velocities (rad/s), duration (s), trunk pitch theta_p (rad),
     momentum about the foot-to-foot line at its touchdown M_p (kg m^2/s), the gains a (kg m^2/s
-    per rad) and b (-) of s, and the chord Jacobian of the eleven equations on the orbit."""
+    per rad) and b (-) of s, the chord Jacobian of the nq + 2 equations on the orbit, and e_theta
+    (nq), how the touchdown configuration moves with the pitch."""
 
     q_t: np.ndarray
     qd_a: np.ndarray
@@ -90,21 +95,22 @@ class SteeringReference:
     a: float
     b: float
     jacobian: np.ndarray
+    direction: np.ndarray
 
-    def error(self, q_pre: np.ndarray, momentum: float) -> float:
+    def error(self, bm: BipedModel, q_pre: np.ndarray, momentum: float) -> float:
         """s (kg m^2/s) of a touchdown at ``q_pre`` with momentum ``momentum`` about the feet line."""
-        return self.a * (pelvis_pitch(q_pre) - self.theta) + self.b * (momentum - self.momentum)
+        return self.a * (pelvis_pitch(bm, q_pre) - self.theta) + self.b * (momentum - self.momentum)
 
 
 def momentum_row(hybrid: HybridStep, q: np.ndarray) -> np.ndarray:
-    """The joint part of z_d^T D_e at the double-support configuration ``q``: qd (rad/s) ->
-    momentum about the foot-to-foot line (kg m^2/s)."""
-    return hybrid.impact(q).momentum_row[3:]
+    """The single-support part of z_d^T D_e at the double-support configuration ``q``: qd (rad/s)
+    -> momentum about the foot-to-foot line (kg m^2/s)."""
+    return hybrid.impact(q).momentum_row[hybrid.bm.ds_of_single]
 
 
-def _theta_derivative(f, q: np.ndarray) -> np.ndarray:
+def _theta_derivative(f, q: np.ndarray, direction: np.ndarray) -> np.ndarray:
     """d f(q + t e_theta) / d t at t = 0, by central differences (``FD_STEP``)."""
-    return (f(q + FD_STEP * THETA_DIRECTION) - f(q - FD_STEP * THETA_DIRECTION)) / (2 * FD_STEP)
+    return (f(q + FD_STEP * direction) - f(q - FD_STEP * direction)) / (2 * FD_STEP)
 
 
 def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.ndarray, qd_a: np.ndarray,
@@ -117,29 +123,32 @@ def reference(hybrid: HybridStep, flow: BallisticFlow, q0: np.ndarray, q_t: np.n
     dM_s given): Phi_qq e dtheta_s + Phi_qv dv + qd_b dtau = 0, (dg/dtheta_s qd_a) dtheta_s +
     g dv - dM_s = 0, and dM' = r (Phi_vq e dtheta_s + Phi_vv dv + qdd_b dtau), with g the
     closure's gain (d momentum after / d v) and r the momentum row at q_T."""
-    seeds = np.zeros((18, 10))
-    seeds[:9, 0], seeds[9:, 1:] = THETA_DIRECTION, np.eye(9)
+    bm = hybrid.bm
+    n = bm.nq
+    e_theta = boundary_configurations(bm).theta_direction
+    seeds = np.zeros((2 * n, n + 1))
+    seeds[:n, 0], seeds[n:, 1:] = e_theta, np.eye(n)
     sens = flow.propagate(q0, qd_a, period, seeds).sens
     phi_theta, phi = sens[:, 0], sens[:, 1:]  # d(q, qd)(T) / d theta_s along e_theta, and / d qd(0)
     qdd_b = flow.acceleration(q_t, qd_b)
     gain = hybrid.impact(q_t).closure_gradients()[0]
-    gain_theta = _theta_derivative(lambda q: hybrid.impact(q).closure_gradients()[0], q_t) @ qd_a
+    gain_theta = _theta_derivative(lambda q: hybrid.impact(q).closure_gradients()[0], q_t, e_theta) @ qd_a
     row = momentum_row(hybrid, q_t)
-    plain = np.zeros((10, 10))
-    plain[:9, :9], plain[:9, 9], plain[9, :9] = phi[:9], qd_b, gain
-    forcing = np.zeros((10, 2))  # columns: dtheta_s, dM_s
-    forcing[:9, 0], forcing[9, 0], forcing[9, 1] = phi_theta[:9], gain_theta, -1.0
+    plain = np.zeros((n + 1, n + 1))
+    plain[:n, :n], plain[:n, n], plain[n, :n] = phi[:n], qd_b, gain
+    forcing = np.zeros((n + 1, 2))  # columns: dtheta_s, dM_s
+    forcing[:n, 0], forcing[n, 0], forcing[n, 1] = phi_theta[:n], gain_theta, -1.0
     response = -np.linalg.solve(plain, forcing)  # (dv, dtau) per (dtheta_s, dM_s)
-    d_qd = phi[9:] @ response[:9] + np.outer(qdd_b, response[9])  # d qd(tau) per (dtheta_s, dM_s)
-    d_qd[:, 0] += phi_theta[9:]
+    d_qd = phi[n:] @ response[:n] + np.outer(qdd_b, response[n])  # d qd(tau) per (dtheta_s, dM_s)
+    d_qd[:, 0] += phi_theta[n:]
     a, b = row @ d_qd
-    jacobian = np.zeros((11, 11))
-    jacobian[:10, :10] = plain
-    jacobian[:9, 10] = -THETA_DIRECTION
-    jacobian[10, :9], jacobian[10, 9] = b * row @ phi[9:], b * row @ qdd_b
-    jacobian[10, 10] = a + b * _theta_derivative(lambda q: momentum_row(hybrid, q), q_t) @ qd_b
-    return SteeringReference(q_t, qd_a, qd_b, period, pelvis_pitch(q_t), float(row @ qd_b), float(a), float(b),
-                             jacobian)
+    jacobian = np.zeros((n + 2, n + 2))
+    jacobian[:n + 1, :n + 1] = plain
+    jacobian[:n, n + 1] = -e_theta
+    jacobian[n + 1, :n], jacobian[n + 1, n] = b * row @ phi[n:], b * row @ qdd_b
+    jacobian[n + 1, n + 1] = a + b * _theta_derivative(lambda q: momentum_row(hybrid, q), q_t, e_theta) @ qd_b
+    return SteeringReference(q_t, qd_a, qd_b, period, pelvis_pitch(bm, q_t), float(row @ qd_b), float(a), float(b),
+                             jacobian, e_theta)
 
 
 class MomentumSteering:
@@ -159,7 +168,7 @@ class MomentumSteering:
         self.hybrid, self.flow, self.ref, self.rate = hybrid, flow, ref, rate
         self.coarse = coarse or flow
         self.transition = transition
-        self.offset = np.zeros(11)
+        self.offset = np.zeros(hybrid.bm.nq + 2)
 
     def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float) -> tuple[np.ndarray, float, float]:
         """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
@@ -191,10 +200,11 @@ class MomentumSteering:
             x = self._from_orbit(q_pre, impact, xd_b, x0)
         if x is None:
             raise SteeringFailed("re-aiming the next step failed (no solution found): the state is too far from the plan")
-        if not x[9] > 0:
+        n = self.hybrid.bm.nq
+        if not x[n] > 0:
             raise SteeringFailed("re-aiming the next step gave a duration <= 0: the state is too far from the plan")
         self.offset = x - np.concatenate([self.ref.qd_a, [self.ref.period, self.ref.theta]])
-        return x[:9], float(x[9]), float(x[10])
+        return x[:n], float(x[n]), float(x[n + 1])
 
     def _from_plain(self, equations: "_Equations", x0: np.ndarray) -> np.ndarray | None:
         """The plain re-aim, then the law's right-hand side moved from the plain solution's value
@@ -203,7 +213,7 @@ class MomentumSteering:
         if not plain.converged:
             return None
         law, x = equations.law, plain.x
-        start = float(equations(x, False)[0][10]) + law  # the law's left-hand side at the plain solution
+        start = float(equations(x, False)[0][-1]) + law  # the law's left-hand side at the plain solution
         for fraction in np.linspace(0.0, 1.0, HOMOTOPY_STAGES + 1)[1:]:
             equations.law = start + fraction * (law - start)
             stage = equations.solve(x, free_pitch=True)
@@ -220,10 +230,10 @@ class MomentumSteering:
         for fraction in np.linspace(0.0, 1.0, HOMOTOPY_STAGES + 1)[1:]:
             q = ref.q_t + fraction * (q_pre - ref.q_t)
             stage_impact = self.hybrid.impact(q)
-            row = stage_impact.momentum_row[3:]
+            row = momentum_row(self.hybrid, q)
             target = ref.momentum + fraction * (momentum - ref.momentum)
             qd = ref.qd_b + (target - row @ ref.qd_b) * row / (row @ row)  # the stage's momentum about the feet line
-            stage = _Equations(self, q, stage_impact, np.concatenate([np.zeros(3), qd])).solve(x, free_pitch=True)
+            stage = _Equations(self, q, stage_impact, self.hybrid.bm.embed(qd)).solve(x, free_pitch=True)
             if not stage.converged:
                 return None
             x = stage.x
@@ -236,22 +246,24 @@ class _Equations:
     def __init__(self, steering: MomentumSteering, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray) -> None:
         self.steering, self.ref = steering, steering.ref
         self.momentum = float(impact.momentum_row @ xd_b)
-        self.law = steering.rate * self.ref.error(q_pre, self.momentum)
+        self.law = steering.rate * self.ref.error(steering.hybrid.bm, q_pre, self.momentum)
         self.gain = impact.closure_gradients()[0]
-        self.q_start = exchange(q_pre)
+        self.q_start = steering.hybrid.exchange.configuration(q_pre)
 
     def __call__(self, x: np.ndarray, jacobian: bool, free_pitch: bool = True, flow: BallisticFlow | None = None):
-        """F (11, or 10 with theta' = theta_p), dF/dx when ``jacobian``, on ``flow`` (default the
-        walker's grid); ``x`` = (v, tau, theta') or (v, tau)."""
+        """F (nq + 2, or nq + 1 with theta' = theta_p), dF/dx when ``jacobian``, on ``flow``
+        (default the walker's grid); ``x`` = (v, tau, theta') or (v, tau)."""
         ref, hybrid = self.ref, self.steering.hybrid
+        q_n = hybrid.bm.nq
         flow = flow or self.steering.flow
-        v, tau, theta = x[:9], x[9], (x[10] if free_pitch else ref.theta)
-        n = 11 if free_pitch else 10
+        v, tau, theta = x[:q_n], x[q_n], (x[q_n + 1] if free_pitch else ref.theta)
+        n = q_n + 2 if free_pitch else q_n + 1
         if not tau > 0:
             return np.full(n, np.nan), None, None
         with np.errstate(over="ignore", invalid="ignore"):
-            run = flow.propagate(self.q_start, v, tau, np.vstack([np.zeros((9, 9)), np.eye(9)]) if jacobian else None)
-        target = ref.q_t + (theta - ref.theta) * THETA_DIRECTION
+            seeds = np.vstack([np.zeros((q_n, q_n)), np.eye(q_n)]) if jacobian else None
+            run = flow.propagate(self.q_start, v, tau, seeds)
+        target = ref.q_t + (theta - ref.theta) * ref.direction
         f = np.append(run.q - target, self.gain @ v - self.momentum)
         if free_pitch:
             row = momentum_row(hybrid, target)
@@ -259,18 +271,20 @@ class _Equations:
         if not jacobian or not np.all(np.isfinite(f)):
             return f, None, None
         jac = np.zeros((n, n))
-        jac[:9, :9], jac[:9, 9], jac[9, :9] = run.sens[:9], run.qd, self.gain
+        jac[:q_n, :q_n], jac[:q_n, q_n], jac[q_n, :q_n] = run.sens[:q_n], run.qd, self.gain
         if free_pitch:
             qdd = flow.acceleration(run.q, run.qd)
-            jac[:9, 10] = -THETA_DIRECTION
-            jac[10, :9], jac[10, 9] = ref.b * row @ run.sens[9:], ref.b * row @ qdd
-            jac[10, 10] = ref.a + ref.b * _theta_derivative(lambda q: momentum_row(hybrid, q), target) @ run.qd
+            jac[:q_n, q_n + 1] = -ref.direction
+            jac[q_n + 1, :q_n], jac[q_n + 1, q_n] = ref.b * row @ run.sens[q_n:], ref.b * row @ qdd
+            jac[q_n + 1, q_n + 1] = ref.a + ref.b * _theta_derivative(lambda q: momentum_row(hybrid, q), target,
+                                                                       ref.direction) @ run.qd
         return f, jac, None
 
     def solve(self, x0: np.ndarray, free_pitch: bool) -> newton.SolveResult:
         """Newton from ``x0`` on the coarse grid, finished by chord steps on the walker's grid
         with the last coarse Jacobian, else by Newton there. The result's x always has theta'."""
-        n = 11 if free_pitch else 10
+        q_n = self.steering.hybrid.bm.nq
+        n = q_n + 2 if free_pitch else q_n + 1
         coarse, fine = self.steering.coarse, self.steering.flow
 
         def on(flow: BallisticFlow):

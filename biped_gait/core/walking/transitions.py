@@ -33,6 +33,7 @@ from ..dynamics.settings import Settings
 from .speed import FixedCadence, LeastEffort, SpeedRule, walkable_nodes
 from .steering import pelvis_pitch
 from .walk import PlannedOrbit, Walker
+from ..model.biped import BipedModel
 
 MAX_CHANGE = 0.05  # m/s per step: the default bound on the aimed gait's change of speed
 SPEED_RULES = ("least_effort", "cadence")
@@ -53,18 +54,19 @@ class Transition:
 
 
 class SpeedFollower:
-    """Follows a commanded speed with the walker's gaits; ``rule`` picks them, ``atlas`` (or
-    None) warm-starts their orbits, ``settings`` are the BVP's (grids, tolerance)."""
+    """Follows a commanded speed with the walker's gaits (of the model ``bm``); ``rule`` picks
+    them, ``atlas`` (or None) warm-starts their orbits, ``settings`` are the BVP's (grids,
+    tolerance)."""
 
-    def __init__(self, rule: SpeedRule, orbit: PlannedOrbit, settings: Settings, atlas: Atlas | None = None,
-                 max_change: float = MAX_CHANGE) -> None:
+    def __init__(self, bm: BipedModel, rule: SpeedRule, orbit: PlannedOrbit, settings: Settings,
+                 atlas: Atlas | None = None, max_change: float = MAX_CHANGE) -> None:
         if not max_change > 0:
             raise ValueError(f"the change of speed per step must be positive, got {max_change}")
-        self.rule, self.settings, self.atlas, self.max_change = rule, settings, atlas, max_change
+        self.bm, self.rule, self.settings, self.atlas, self.max_change = bm, rule, settings, atlas, max_change
         self.orbit = orbit
         self.speed = orbit.step_length / orbit.period  # of the gait aimed at (m/s)
         # (L m, T s) and warm start (qd(0), theta) of the last two gaits aimed at, oldest first
-        self._solved = [((orbit.step_length, orbit.period), (orbit.qd_a, pelvis_pitch(orbit.q_t)))]
+        self._solved = [((orbit.step_length, orbit.period), (orbit.qd_a, pelvis_pitch(bm, orbit.q_t)))]
         self._commanded = self.speed
         self._lock = threading.Lock()
         self.transitions: list[Transition] = []
@@ -102,7 +104,8 @@ class SpeedFollower:
         if orbit is not None:
             walker.retarget(orbit)
             self.orbit, self.speed = orbit, speed
-            self._solved = [*self._solved[-1:], ((orbit.step_length, orbit.period), (orbit.qd_a, pelvis_pitch(orbit.q_t)))]
+            self._solved = [*self._solved[-1:],
+                            ((orbit.step_length, orbit.period), (orbit.qd_a, pelvis_pitch(self.bm, orbit.q_t)))]
         return transition
 
     def _secant(self, point: tuple[float, float]) -> tuple[np.ndarray, float]:
@@ -161,7 +164,8 @@ def follower_for(walker: Walker, settings: Settings, rule: str = SPEED_RULES[0],
     walkable = walkable_nodes(atlas, orbit.arm_amplitude, walker.hybrid, walker.grid) if atlas is not None else None
     if rule == "least_effort" and atlas is not None:
         try:
-            return SpeedFollower(LeastEffort(atlas, orbit.arm_amplitude, walkable), orbit, settings, atlas, max_change), ""
+            return SpeedFollower(walker.bm, LeastEffort(atlas, orbit.arm_amplitude, walkable), orbit, settings, atlas,
+                                 max_change), ""
         except ValueError as exc:
             notes.append(str(exc))
     try:
@@ -171,4 +175,4 @@ def follower_for(walker: Walker, settings: Settings, rule: str = SPEED_RULES[0],
         notes.append(str(exc))
     if rule == "least_effort":
         notes.append(f"walking at a fixed cadence (T = {orbit.period:g} s) instead of the least effort per metre")
-    return SpeedFollower(cadence, orbit, settings, atlas, max_change), "; ".join(notes)
+    return SpeedFollower(walker.bm, cadence, orbit, settings, atlas, max_change), "; ".join(notes)

@@ -40,7 +40,8 @@ import numpy as np
 from ..dynamics import newton
 from ..gait.configurations import GaitMode
 from ..dynamics.flow import hermite_samples
-from ..dynamics.hybrid import HybridStep, ImpactMap, exchange, mirror_for, other_side
+from ..dynamics.hybrid import HybridStep, ImpactMap
+from ..model.exchange import next_heading, other_side, world_axes
 from ..dynamics.impulses import EffortOptions, solve_impulses
 from ..model.biped import BipedModel
 from ..model.params import load_params
@@ -174,7 +175,9 @@ class StepOutcome:
 @dataclass(frozen=True)
 class WalkState:
     """Where the walker is: the model state at the start of the current step, which physical
-    foot is the stance foot, and that foot's world position (m)."""
+    foot is the stance foot, that foot's world position (m), and the heading (rad) of the step's
+    model frame (its axes are the world's turned by it about the vertical, then mirrored for a
+    left stance)."""
 
     q: np.ndarray
     qd: np.ndarray
@@ -182,6 +185,22 @@ class WalkState:
     t: float = 0.0
     stance_side: str = "right"
     stance_foot: np.ndarray = field(default_factory=lambda: np.array([0.0, -0.2, 0.0]))
+    heading: float = 0.0
+
+    @property
+    def axes(self) -> np.ndarray:
+        """The step's model axes in the world (3 x 3, ``world_axes``)."""
+        return world_axes(self.stance_side, self.heading)
+
+
+Cycle = tuple["PlannedOrbit", ...]
+"""The steps a gait repeats: one for a straight gait, two (right foot, left foot) for a stride on a
+circle, each in its own model coordinates."""
+
+
+def as_cycle(orbit: "PlannedOrbit | Cycle") -> Cycle:
+    """A gait's steps: ``orbit`` itself, or its steps."""
+    return (orbit,) if isinstance(orbit, PlannedOrbit) else tuple(orbit)
 
 
 def prepare_walking() -> None:
@@ -193,9 +212,10 @@ def prepare_walking() -> None:
 
 
 class Walker:
-    """Walks the gait of ``orbit`` with the dynamics of ``hybrid`` one step per ``walk_step``."""
+    """Walks the gait of ``orbit`` (one periodic step, or the steps of a stride, ``Cycle``) with
+    the dynamics of ``hybrid`` one step per ``walk_step``."""
 
-    def __init__(self, hybrid: HybridStep, orbit: PlannedOrbit, rate: float, reaim: bool = True,
+    def __init__(self, hybrid: HybridStep, orbit: PlannedOrbit | Cycle, rate: float, reaim: bool = True,
                  settings: Settings = DEFAULTS, momentum_rate: float | None = None) -> None:
         """``rate``: samples per second of simulated time; ``reaim``: re-solve each step's BVP
         from the actual state (else aim at the plan's velocity); ``momentum_rate``: steer the
@@ -214,41 +234,63 @@ class Walker:
         self.step_flow = hybrid.flow(self.grid)
         self.samples = hybrid.samples
         self.reaim, self.momentum_rate = reaim, momentum_rate
-        self._aim_at(orbit)
-        self.state = WalkState(np.array(orbit.q0), np.array(orbit.qd_a),
+        self.steering: MomentumSteering | None = None
+        self._cycle = self._prepared(as_cycle(orbit))
+        self._aim_at(0)
+        first = self._cycle[0][0]
+        self.state = WalkState(np.array(first.q0), np.array(first.qd_a),
                                stance_foot=np.array([0.0, -self.bm.params.hip_half_width, 0.0]))
         self.sample_index = 0  # the next sample is at sample_index / rate in the walk (s)
         self.trunk_push = TrunkPush(self.bm)
         self._pushes: list[Push] = []  # to act in the current step, by time
         self._applied: list[AppliedPush] = []
-        self._next_orbit: PlannedOrbit | None = None
+        self._next_cycle: Cycle | None = None
 
-    def _aim_at(self, orbit: PlannedOrbit) -> None:
-        """Make ``orbit`` the plan the steps are aimed at (and compared with)."""
-        if not orbit.converged:
-            raise ValueError("cannot walk a plan that did not converge")
+    def _prepared(self, cycle: Cycle, transition: np.ndarray | None = None) -> list[tuple]:
+        """Each step of ``cycle`` with what its re-aim needs, computed once: the momentum steering
+        towards it (its first one a transition from another gait, whose last solution was
+        ``transition`` away from that gait's), or d q(T) / d qd(0) on it (the plain re-aim's
+        chord Jacobian)."""
+        out = []
+        for k, orbit in enumerate(cycle):
+            if not orbit.converged:
+                raise ValueError("cannot walk a plan that did not converge")
+            q0, q_t, qd_a, qd_b = (np.asarray(orbit.q0), np.asarray(orbit.q_t), np.asarray(orbit.qd_a),
+                                   np.asarray(orbit.qd_b))
+            aim = None
+            if self.momentum_rate is not None:
+                ref = reference(self.hybrid, self.step_flow, q0, q_t, qd_a, qd_b, orbit.period)
+                coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
+                aim = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse,
+                                       transition if k == 0 else None)
+            elif self.reaim:
+                n = self.bm.nq
+                seeds = np.vstack([np.zeros((n, n)), np.eye(n)])
+                aim = self.step_flow.propagate(q0, qd_a, orbit.period, seeds).sens[:n]
+            out.append((orbit, aim))
+        return out
+
+    def _aim_at(self, index: int) -> None:
+        """Make step ``index`` of the cycle the plan the walk aims at (and compares with)."""
+        self._index = index
+        orbit, aim = self._cycle[index]
         self.orbit, self.period = orbit, orbit.period
         self.guard = self.hybrid.guard(0.5 * orbit.period)
         self.q_t, self.qd_b, self.qd_a = np.asarray(orbit.q_t), np.asarray(orbit.qd_b), np.asarray(orbit.qd_a)
         self.next_period = orbit.period
-        previous, self.steering = getattr(self, "steering", None), None
-        transition = previous.offset if previous is not None else None
         if self.momentum_rate is not None:
-            ref = reference(self.hybrid, self.step_flow, np.asarray(orbit.q0), self.q_t, self.qd_a, self.qd_b, self.period)
-            coarse = self.hybrid.flow(self.settings.coarse_steps) if self.settings.coarse_steps < self.grid else None
-            self.steering = MomentumSteering(self.hybrid, self.step_flow, ref, self.momentum_rate, coarse, transition)
+            self.steering = aim
         elif self.reaim:
-            # d q(T) / d qd(0) on the planned orbit: the chord Jacobian of every re-aim.
-            seeds = np.vstack([np.zeros((9, 9)), np.eye(9)])
-            self._phi_qv = self.step_flow.propagate(np.asarray(orbit.q0), self.qd_a, self.period, seeds).sens[:9]
+            self._phi_qv = aim
 
-    def retarget(self, orbit: PlannedOrbit) -> None:
-        """Aim the next step at ``orbit`` (another gait): from the current step's touchdown on, the
-        re-aim steers to it and touchdowns are compared with it (a transition step,
-        docs/model.md section 8.8)."""
-        if not orbit.converged:
+    def retarget(self, orbit: PlannedOrbit | Cycle) -> None:
+        """Aim the next step at ``orbit`` (another gait, or the steps of a stride): from the current
+        step's touchdown on, the re-aim steers to it and touchdowns are compared with it (a
+        transition step, docs/model.md section 8.8)."""
+        cycle = as_cycle(orbit)
+        if not all(o.converged for o in cycle):
             raise ValueError("cannot walk a plan that did not converge")
-        self._next_orbit = orbit
+        self._next_cycle = cycle
 
     def shove(self, delta_qd: np.ndarray) -> None:
         """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current step starts with."""
@@ -272,7 +314,7 @@ class Walker:
         s = self.state
         while self._pushes and self._pushes[0].time_in_step <= due + 1e-12:
             push = self._pushes.pop(0)
-            jump = self.trunk_push.velocity_jump(q, push.impulse, s.stance_side)
+            jump = self.trunk_push.velocity_jump(q, push.impulse, s.axes)
             self._applied.append(AppliedPush(s.step, s.stance_side, s.t + t_step, t_step, push.impulse, jump))
             qd = qd + jump
         return qd
@@ -356,14 +398,18 @@ class Walker:
         """Impulses from the actual pre-impact state towards the plan, then the leg exchange."""
         bm, s = self.bm, self.state
         error = max(float(np.max(np.abs(q_td - self.q_t))), float(np.max(np.abs(qd_td - self.qd_b))))
-        if self._next_orbit is not None:
-            self._aim_at(self._next_orbit)
-            self._next_orbit = None
+        if self._next_cycle is not None:
+            offset = self.steering.offset if self.steering is not None else None
+            self._cycle = self._prepared(self._next_cycle, offset)
+            self._next_cycle = None
+            self._aim_at(0)
+        elif len(self._cycle) > 1:  # a stride: the next step is the cycle's next
+            self._aim_at((self._index + 1) % len(self._cycle))
         impact = self.hybrid.impact(q_td)
         planned = impact.problem(qd_td, self.qd_a)
         reachable, miss = planned.reachable()
         if self.reaim:
-            qd_next = self._reaim(exchange(q_td), impact, planned.xd_b)
+            qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b)
             problem = replace(planned, xd_a=impact.next_step_velocity(qd_next))
         else:
             problem = reachable
@@ -375,15 +421,17 @@ class Walker:
             raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message})")
         # The new stance foot's world position, then the mirror: the next step in model coordinates.
         tip = bm.swing_tip(q_td)
-        new_foot = s.stance_foot + mirror_for(s.stance_side) @ tip
+        new_foot = s.stance_foot + s.axes @ tip
         new_foot[2] = 0.0
+        exchange, side = self.hybrid.exchange, other_side(s.stance_side)
         self.state = WalkState(
-            q=exchange(q_td),
-            qd=exchange(xd_a[3:]),
+            q=exchange.configuration(q_td),
+            qd=exchange.velocity(q_td, xd_a),
             step=s.step + 1,
             t=s.t + t_step,
-            stance_side=other_side(s.stance_side),
+            stance_side=side,
             stance_foot=new_foot,
+            heading=next_heading(s.heading, side, exchange.heading(q_td)),
         )
         return Touchdown(
             step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
@@ -404,19 +452,21 @@ class Walker:
         """
         if self.steering is not None:
             try:
-                v, self.next_period, _ = self.steering.solve(exchange(q_start), impact, xd_b, self.next_period)
+                q_pre = self.hybrid.exchange.configuration(q_start)  # the exchange is an involution
+                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period)
             except SteeringFailed as exc:
                 raise Fall(str(exc)) from None
             return v
         gain, _ = impact.closure_gradients()  # d(momentum after)/d(qd_next)
         target_momentum = float(impact.momentum_row @ xd_b)
-        jac = np.zeros((10, 10))
-        jac[:9, :9], jac[:9, 9], jac[9, :9] = self._phi_qv, self.qd_b, gain
+        n = self.bm.nq
+        jac = np.zeros((n + 1, n + 1))
+        jac[:n, :n], jac[:n, n], jac[n, :n] = self._phi_qv, self.qd_b, gain
 
         def residual(x: np.ndarray):
-            v, duration = x[:9], x[9]
+            v, duration = x[:n], x[n]
             if not duration > 0:
-                return np.full(10, np.nan), None
+                return np.full(n + 1, np.nan), None
             with np.errstate(over="ignore", invalid="ignore"):
                 run = self.step_flow.propagate(q_start, v, duration)
             return np.append(run.q - self.q_t, gain @ v - target_momentum), None
@@ -427,8 +477,8 @@ class Walker:
             raise Fall("re-aiming the next step diverged: the state is too far from the plan")
         if not result.converged:
             raise Fall("re-aiming the next step did not converge: the state is too far from the plan")
-        self.next_period = float(result.x[9])
-        return result.x[:9]
+        self.next_period = float(result.x[n])
+        return result.x[:n]
 
 
 class Walk:
@@ -444,32 +494,33 @@ class Walk:
     ``Walker.push``, ``Walker.retarget``).
     """
 
-    def __init__(self, orbit: PlannedOrbit, rate: float, steps: int = 0, reaim: bool = True,
+    def __init__(self, orbit: PlannedOrbit | Cycle, rate: float, steps: int = 0, reaim: bool = True,
                  settings: Settings = DEFAULTS, momentum_rate: float | None = None,
                  before_step: Callable[[Walker], object] | None = None) -> None:
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if steps < 0:
             raise ValueError(f"steps must be 0 (no end) or positive, got {steps}")
-        self.orbit, self.rate, self.steps = orbit, rate, steps
+        cycle = as_cycle(orbit)
+        self.orbit, self.rate, self.steps = cycle[0], rate, steps
         self.before_step = before_step
         self.problem = ""
         self.model: BipedModel | None = None
         self.world: WorldView | None = None
         self.walker: Walker | None = None
-        if not orbit.converged:
+        if not all(o.converged for o in cycle):
             self.problem = "the plan did not converge"
             return
-        if not orbit.admissible:
-            self.problem = "the plan is not admissible: " + "; ".join(orbit.reasons)
+        if not all(o.admissible for o in cycle):
+            self.problem = "the plan is not admissible: " + "; ".join(r for o in cycle for r in o.reasons)
             return
         try:
-            self.model = BipedModel.from_params(load_params(orbit.params or None))
+            self.model = BipedModel.from_params(load_params(self.orbit.params or None))
         except ValueError as exc:
             self.problem = str(exc)
             return
         self.world = WorldView(self.model)
-        self.walker = Walker(HybridStep(self.model), orbit, rate, reaim, settings, momentum_rate)
+        self.walker = Walker(HybridStep(self.model), cycle, rate, reaim, settings, momentum_rate)
 
     def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
         for item in self.batches():
@@ -494,7 +545,8 @@ class Walk:
             pushes = list(outcome.pushes)
             if outcome.samples:
                 pictures = world.pictures(np.array([x.q for x in outcome.samples]),
-                                          np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot)
+                                          np.array([x.qd for x in outcome.samples]), s.stance_side, s.stance_foot,
+                                          s.heading)
                 times = np.array([x.t for x in outcome.samples])
                 start = 0
                 for push in pushes:  # each before the first sample at or after it

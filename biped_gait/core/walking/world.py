@@ -2,9 +2,11 @@
 to what visualization and other nodes need, with the right or left foot in stance.
 
 World frame: x forward, y left, z up, origin at the first stance foot's... lateral midline: the
-feet are at y = -/+ hip_half_width. With the left foot in stance the model is the mirror image
-of the robot (y -> -y): positions mirror, axial vectors (angular velocity, angular momentum)
-map to (-x, y, -z) of the model's, and the URDF's joints swap sides (``urdf.physical_joint_array``).
+feet are at y = -/+ hip_half_width. A step's model axes are the world's turned by the walk's
+heading about the vertical (zero on straight gaits) and, with the left foot in stance, mirrored
+(y -> -y): the model is then the mirror image of the robot, positions mirror, axial vectors
+(angular velocity, angular momentum) map to (-x, y, -z) of the model's, and the URDF's joints
+swap sides (``urdf.UrdfJoints.array``).
 Link transforms are computed from the URDF by Pinocchio, as robot_state_publisher would. Many
 instants are computed in one call (``WorldView.pictures``, in the compiled twin when it is built).
 """
@@ -16,10 +18,10 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.hybrid import mirror_for
-from ..model.biped import BipedModel
 from ..dynamics.samples import JointPlacements, SampleEvaluator
-from ..model.urdf import PHYSICAL_JOINTS, make_urdf, physical_joint_array
+from ..model.biped import BipedModel
+from ..model.exchange import world_axes
+from ..model.urdf import UrdfJoints, make_urdf
 
 WORLD_FRAME = "world"
 BASE_FRAME = "base_link"
@@ -58,8 +60,9 @@ class WorldPictures:
     """Many instants of the walk in world terms, one per row, for one stance foot: what a
     ``WorldState`` holds for one instant (SI units; quaternions x, y, z, w)."""
 
-    joint_positions: np.ndarray  # n x 7, PHYSICAL_JOINTS order (rad)
-    joint_velocities: np.ndarray  # n x 7 (rad/s)
+    joint_names: tuple[str, ...]  # the URDF's moving joints
+    joint_positions: np.ndarray  # n x joints, ``joint_names`` order (rad)
+    joint_velocities: np.ndarray  # n x joints (rad/s)
     pelvis_position: np.ndarray  # n x 3, world (m)
     pelvis_quaternion: np.ndarray  # n x 4, pelvis in world
     pelvis_linear_velocity: np.ndarray  # n x 3, in the pelvis frame (m/s)
@@ -85,7 +88,7 @@ class WorldPictures:
         links += [Transform(parent, child, translation, quaternion) for (parent, child), translation, quaternion
                   in zip(self.link_frames, self.link_translations[i], self.link_quaternions[i])]
         return WorldState(
-            joint_names=PHYSICAL_JOINTS,
+            joint_names=self.joint_names,
             joint_positions=self.joint_positions[i].tolist(),
             joint_velocities=self.joint_velocities[i].tolist(),
             pelvis_position=self.pelvis_position[i],
@@ -100,7 +103,7 @@ class WorldPictures:
         )
 
 
-_PER_INSTANT = tuple(f.name for f in fields(WorldPictures) if f.name not in ("stance_foot", "link_frames"))
+_PER_INSTANT = tuple(f.name for f in fields(WorldPictures) if f.name not in ("joint_names", "stance_foot", "link_frames"))
 
 
 def _quaternion(rotation: np.ndarray) -> np.ndarray:
@@ -117,7 +120,8 @@ class WorldView:
         self.urdf_model = pin.buildModelFromXML(self.urdf)
         self.samples = SampleEvaluator(bm, native)
         self.placements = JointPlacements(self.urdf_model, native)
-        self._columns = [self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in PHYSICAL_JOINTS]
+        self.joints = UrdfJoints(bm.params.joints, bm.coordinates)
+        self._columns = [self.urdf_model.joints[self.urdf_model.getJointId(name)].idx_q for name in self.joints.names]
         # (parent link, child link) of every moving joint, in the URDF model's order.
         self.link_frames = tuple(
             (BASE_FRAME if self.urdf_model.parents[jid] == 0 else self._link_of_joint(self.urdf_model.parents[jid]),
@@ -141,34 +145,60 @@ class WorldView:
                 out.append(Transform(parent, frame.name, frame.placement.translation.copy(), _quaternion(frame.placement.rotation)))
         return out
 
-    def pictures(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray) -> WorldPictures:
+    def pictures(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray,
+                 heading: float = 0.0) -> WorldPictures:
         """The world pictures of model states (rows of ``q``, ``qd``) with the ``stance_side``
-        foot at ``stance_foot``, evaluated in one call."""
+        foot at ``stance_foot`` and the step's model frame at ``heading`` (rad), evaluated in one
+        call."""
         q, qd = np.atleast_2d(q), np.atleast_2d(qd)
-        mirror = np.diag(mirror_for(stance_side))  # positions: (x, y, z) -> (x, -/+ y, z)
+        mirror = np.diag(world_axes(stance_side))  # positions: (x, y, z) -> (x, -/+ y, z)
         axial = -mirror if stance_side == "left" else np.ones(3)  # axial vectors under the mirror
         poses = self.samples.poses(q, qd, mirrored=stance_side == "left")
-        positions = physical_joint_array(q, stance_side)
+        positions = self.joints.array(q, stance_side)
         urdf_q = np.zeros((len(q), self.urdf_model.nq))
         urdf_q[:, self._columns] = positions
         translations, quaternions = self.placements.local(urdf_q)
         h_com = poses.angular_momentum - np.cross(poses.com, poses.momentum)
+        turn = _Turn(heading)
         return WorldPictures(
+            joint_names=self.joints.names,
             joint_positions=positions,
-            joint_velocities=physical_joint_array(qd, stance_side),
-            pelvis_position=stance_foot + mirror * poses.pelvis_position,
-            pelvis_quaternion=poses.pelvis_quaternion,
+            joint_velocities=self.joints.array(qd, stance_side),
+            pelvis_position=stance_foot + turn.vectors(mirror * poses.pelvis_position),
+            pelvis_quaternion=turn.quaternions(poses.pelvis_quaternion),
             pelvis_linear_velocity=mirror * poses.pelvis_linear_velocity,
             pelvis_angular_velocity=axial * poses.pelvis_angular_velocity,
             stance_foot=np.array(stance_foot, dtype=float),
-            com=stance_foot + mirror * poses.com,
-            momentum_about_foot=axial * poses.angular_momentum,
-            momentum_about_com=axial * h_com,
+            com=stance_foot + turn.vectors(mirror * poses.com),
+            momentum_about_foot=turn.vectors(axial * poses.angular_momentum),
+            momentum_about_com=turn.vectors(axial * h_com),
             link_frames=self.link_frames,
             link_translations=translations,
             link_quaternions=quaternions,
         )
 
-    def state(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray) -> WorldState:
-        """The world picture of one model state (q, qd) with ``stance_side`` foot at ``stance_foot``."""
-        return self.pictures(q, qd, stance_side, stance_foot).state(0)
+    def state(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray,
+              heading: float = 0.0) -> WorldState:
+        """The world picture of one model state (q, qd) with ``stance_side`` foot at ``stance_foot``
+        and the step's model frame at ``heading`` (rad)."""
+        return self.pictures(q, qd, stance_side, stance_foot, heading).state(0)
+
+
+class _Turn:
+    """The walk's heading (rad) applied to world vectors and orientations (rows): nothing at 0."""
+
+    def __init__(self, heading: float) -> None:
+        self.heading = heading
+        c, s = np.cos(heading), np.sin(heading)
+        self.rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    def vectors(self, rows: np.ndarray) -> np.ndarray:
+        return rows if self.heading == 0.0 else rows @ self.rotation.T
+
+    def quaternions(self, rows: np.ndarray) -> np.ndarray:
+        """Quaternions (x, y, z, w rows) turned by the heading about the vertical: q_turn q."""
+        if self.heading == 0.0:
+            return rows
+        c, s = np.cos(self.heading / 2), np.sin(self.heading / 2)  # q_turn = (0, 0, s, c)
+        x, y, z, w = rows.T
+        return np.column_stack([c * x - s * y, c * y + s * x, c * z + s * w, c * w - s * z])

@@ -41,17 +41,19 @@ Eigen::Vector4d quaternion(const Eigen::Matrix3d& rotation) { return Eigen::Quat
 class NativeSamples {
  public:
   // single_text, extended_text: pinocchio.Model.saveToString() of the 9-DOF single-support model and
-  // the 12-DOF extended model (root translation first); swing_tip: frame id of the swing-foot tip;
-  // pelvis: joint id of the pelvis; links: joint ids whose origins must stay above the ground;
+  // the extended model (root translation first); swing_tip: frame id of the swing-foot tip;
+  // pelvis: joint id of the pelvis, pelvis_offset: the pelvis centre in that joint's frame (m);
+  // links: joint ids whose origins must stay above the ground;
   // arms: joint ids of the shoulders, whose hands are arm_length (m) down the joint's -z axis.
   NativeSamples(const std::string& single_text, const std::string& extended_text, int swing_tip, int pelvis,
-                std::vector<int> links, std::vector<int> arms, double arm_length)
+                const Vector3& pelvis_offset, std::vector<int> links, std::vector<int> arms, double arm_length)
       : single_(load(single_text)),
         extended_(load(extended_text)),
         single_data_(single_),
         extended_data_(extended_),
         swing_tip_(swing_tip),
         pelvis_(pelvis),
+        pelvis_offset_(pelvis_offset),
         links_(std::move(links)),
         arms_(std::move(arms)),
         hand_(0.0, 0.0, -arm_length),
@@ -113,10 +115,12 @@ class NativeSamples {
       xd.tail(single_.nv) = qd.row(i).transpose();
       pinocchio::forwardKinematics(single_, single_data_, x.tail(single_.nq), xd.tail(single_.nv));
       const pinocchio::SE3& pelvis = single_data_.oMi[pelvis_];
-      position.row(i) = pelvis.translation().transpose();
+      position.row(i) = (pelvis.translation() + pelvis.rotation() * pelvis_offset_).transpose();
       const Eigen::Matrix3d rotation = mirror.asDiagonal() * pelvis.rotation() * mirror.asDiagonal();
       orientation.row(i) = quaternion(rotation).transpose();
-      velocity.row(i) << single_data_.v[pelvis_].linear().transpose(), single_data_.v[pelvis_].angular().transpose();
+      const pinocchio::Motion& twist = single_data_.v[pelvis_];
+      velocity.row(i) << (twist.linear() + twist.angular().cross(pelvis_offset_)).transpose(),
+          twist.angular().transpose();
       angular.row(i) = angular_momentum(x, xd).transpose();
       com.row(i) = extended_data_.com[0].transpose();
       momentum.row(i) = extended_data_.hg.linear().transpose();
@@ -165,6 +169,7 @@ class NativeSamples {
   pinocchio::Data single_data_, extended_data_;
   pinocchio::FrameIndex swing_tip_;
   pinocchio::JointIndex pelvis_;
+  Vector3 pelvis_offset_;
   std::vector<int> links_, arms_;
   Vector3 hand_;
   Vector tau_;
@@ -201,9 +206,10 @@ class NativePlacements {
 PYBIND11_MODULE(_samples_native, m) {
   m.doc() = "Compiled evaluation of many biped states at once (see biped_gait/core/dynamics/samples.py).";
   py::class_<NativeSamples>(m, "NativeSamples")
-      .def(py::init<const std::string&, const std::string&, int, int, std::vector<int>, std::vector<int>, double>(),
-           py::arg("single_text"), py::arg("extended_text"), py::arg("swing_tip"), py::arg("pelvis"), py::arg("links"),
-           py::arg("arms"), py::arg("arm_length"))
+      .def(py::init<const std::string&, const std::string&, int, int, const Vector3&, std::vector<int>,
+                    std::vector<int>, double>(),
+           py::arg("single_text"), py::arg("extended_text"), py::arg("swing_tip"), py::arg("pelvis"),
+           py::arg("pelvis_offset"), py::arg("links"), py::arg("arms"), py::arg("arm_length"))
       .def("dynamics", &NativeSamples::dynamics, py::arg("q"), py::arg("qd"))
       .def("swing_tip_motion", &NativeSamples::swing_tip_motion, py::arg("q"), py::arg("qd"))
       .def("poses", &NativeSamples::poses, py::arg("q"), py::arg("qd"), py::arg("mirrored"))
