@@ -4,7 +4,7 @@ its numbers are then written in place into copies of those bytes.
 A message of a fixed shape has the same strings and sequence lengths every time (the joint
 names, the frame ids, the covariances), so its CDR bytes differ from one instance to the next
 only where its numbers are. A ``CdrTemplate`` finds those places by serializing, with rclpy's
-``serialize_message``, the message its ``build`` function makes of marker values, and checks
+``serialize_message`` (``cdr.serialized``), the message its ``build`` function makes of marker values, and checks
 them by comparing its own bytes of random values with rclpy's. ``encode`` then writes the
 numbers of many messages (one per row) into as many copies of the template at once. The bytes
 are those rclpy gives, to the bit of every field (``CdrTemplate`` refuses a message for which
@@ -17,9 +17,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import deserialize_message
 
-HEADER = 4  # bytes of the CDR encapsulation header; alignment counts from its end
+from .cdr import HEADER, serialized
+
 _FLOAT_MARK = -1.2345678901234567e-123  # times 1, 2, ...: float64 markers
 _INT_MARK = 0x5EC0_1A00  # plus 0, 1, ...: uint32 markers
 Build = Callable[[np.ndarray, np.ndarray], object]
@@ -37,7 +38,7 @@ class CdrTemplate:
         floats = _FLOAT_MARK * np.arange(1, n_floats + 1)
         ints = _INT_MARK + np.arange(n_ints)
         marked = build(floats, ints)
-        self.template = np.frombuffer(serialize_message(marked), dtype=np.uint8)
+        self.template = np.frombuffer(serialized(marked), dtype=np.uint8)
         body = self.template[HEADER:]
         self._float_bytes = np.concatenate(
             [_where(body, value.tobytes(), 8, once=True) for value in floats.astype("<f8")] or [np.zeros(0, int)])
@@ -46,7 +47,7 @@ class CdrTemplate:
         check_floats, check_ints = rng.normal(size=n_floats), rng.integers(0, 2**31, n_ints)
         encoded = self.encode(check_floats[None], check_ints[None])[0].tobytes()
         expected = build(check_floats, check_ints)
-        if len(encoded) != len(serialize_message(expected)) or deserialize_message(encoded, type(marked)) != expected:
+        if len(encoded) != len(serialized(expected)) or deserialize_message(encoded, type(marked)) != expected:
             raise ValueError("the message's bytes do not follow its values: not a message of a fixed shape")
 
     @property

@@ -25,7 +25,8 @@ TYPE_NAMES = {bool: "true or false", int: "an integer", float: "a floating-point
 @dataclass(frozen=True)
 class Param:
     """One read-only ROS parameter: ``description`` names its unit; ``low``/``high`` bound a
-    number (inclusive; a ``ParameterDescriptor`` range); ``choices`` list a string's values."""
+    number (inclusive; a ``ParameterDescriptor`` range); ``choices`` list a string's values;
+    ``infinite``: a float may be +-inf (never NaN)."""
 
     name: str
     default: bool | int | float | str
@@ -33,6 +34,7 @@ class Param:
     low: float | None = None
     high: float | None = None
     choices: tuple[str, ...] = ()
+    infinite: bool = False
 
     def descriptor(self) -> ParameterDescriptor:
         """The descriptor rclpy checks a value against (read-only, with the range if any)."""
@@ -52,7 +54,7 @@ class Param:
 
     def check(self, value) -> None:
         """``ValueError`` (one line) if ``value`` is not allowed (what rclpy does not check)."""
-        if isinstance(value, float) and not math.isfinite(value):
+        if isinstance(value, float) and (math.isnan(value) or math.isinf(value) and not self.infinite):
             raise ValueError(f"parameter {self.name}: must be a finite number, got {value}")
         if self.choices and value not in self.choices:
             raise ValueError(f"parameter {self.name}: must be {self.bounds()}, got {clip(repr(value))}")

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING
 from rclpy.node import Node
 from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile
-from rclpy.serialization import serialize_message
 
 from ..recording.background import BackgroundRecorder
 from ..recording.schemas import type_name
+from .cdr import serialized
 from .qos import describe
 
 if TYPE_CHECKING:  # the live view's SDK is loaded only where a live view runs
@@ -51,7 +51,7 @@ class RecordedPublisher:
         if self.publisher is None and self.live is None:
             self.record_later(lambda: msg, stamp_ns)
             return
-        data = serialize_message(msg)
+        data = serialized(msg)
         self.send(data, stamp_ns)
         if self.recorder is not None:
             self.recorder.write(self.topic, data, stamp_ns)
@@ -60,7 +60,7 @@ class RecordedPublisher:
         """Record the message ``make()`` returns, built and serialized on the recorder's writer
         thread (for a recorded-only topic), at ``stamp_ns`` (ns; default: now)."""
         if self.recorder is not None:
-            self.recorder.write(self.topic, lambda: serialize_message(make()), stamp_ns)
+            self.recorder.write(self.topic, lambda: serialized(make()), stamp_ns)
 
     def send(self, data: bytes, stamp_ns: int | None = None) -> None:
         """Publish and show the CDR bytes ``data`` without recording them: the caller records

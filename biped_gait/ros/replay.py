@@ -39,7 +39,7 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 from builtin_interfaces.msg import Time as TimeMsg
 from rclpy.node import Node
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import deserialize_message
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.utilities import remove_ros_args
 from rosgraph_msgs.msg import Clock
@@ -48,6 +48,7 @@ from std_srvs.srv import Trigger
 from ..recording import topics
 from ..recording.reader import Bag, BagError, open_bag
 from ..arguments import OneLineParser
+from .cdr import serialized
 from .process import run_node
 from .qos import CLOCK
 
@@ -159,7 +160,7 @@ def restamped(data: bytes, cls: type, offset_ns: int) -> bytes:
         return data
     msg = deserialize_message(data, cls)
     shift_times(msg, offset_ns)
-    return serialize_message(msg)
+    return serialized(msg)
 
 
 class ReplayNode(Node):

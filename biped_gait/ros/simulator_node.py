@@ -103,7 +103,8 @@ PARAMETERS = (
           "takes degrees); negative: ask the planner's action for the optimal one", -math.pi / 2, math.pi / 2),
     Param("mode", "normal", "arm swing of the requested plan", choices=tuple(m.value for m in GaitMode)),
     Param("turn_radius", math.inf, "radius of the circle of the requested plan (m, signed: positive turns left; "
-          "inf: straight): a stride of two steps, which needs hip roll and yaw joints (params aoustin2013-hips)"),
+          "inf: straight): a stride of two steps, which needs hip roll and yaw joints (params aoustin2013-hips)",
+          infinite=True),
     Param("params", "", "parameter set of the requested plan (a shipped name or a YAML file path); empty: the "
           "planner's. A plan from the wire is walked only with a shipped set or this file"),
     Param("steps", 20, "steps to walk (count); 0: until stopped", 0, 1000000),

@@ -255,6 +255,16 @@ class ImpulseSolution:
             return np.zeros(0)
         return np.array([self.x[sl][3] for sl in lay.reactions])
 
+    def foot_line_moment(self, problem: "ImpactProblem") -> float:
+        """y^T A x (kg m^2/s): the momentum about the feet line the ground's spin moment impulses
+        of this solution change (zero where the feet's spin axes are vertical, and with the
+        paper's nine joints). The double support is consistent when the closure gap, z_d^T D_e
+        (Xd^a - Xd^b), equals minus this."""
+        if self.layout.contact_old == 3:
+            return 0.0
+        a, _ = problem.equations()
+        return float(problem.left_null_vector() @ a @ self.x)
+
     @property
     def joint_rates(self) -> np.ndarray:
         """The actuated joints' rates in Xd^- and Xd^+ (rad/s)."""
@@ -266,20 +276,15 @@ Equations = tuple[np.ndarray, np.ndarray]  # A and b of eqs. (6)-(10)
 
 
 def _reduced_equations(problem: ImpactProblem, equations: Equations) -> Equations:
-    """Eqs. (6)-(10) less the one row the null vector y makes dependent (its largest entry),
-    when y is a null vector (the momentum about the feet line is conserved); else all of them."""
+    """Eqs. (6)-(10) less the row of the largest entry of y, the combination that carries the
+    momentum about the feet line: with the feet's spin axes vertical it depends on the others;
+    with them tilted (legs leaning), it says how much of that momentum the ground's spin moments
+    change, and the gait's closure is solved to match what they do (``foot_line_moment``,
+    docs/model.md section 5.2)."""
     a, b = equations
-    y = problem.left_null_vector()
-    if problem.layout.contact_old > 3 and np.max(np.abs(y @ a)) > NULL_TOLERANCE * np.max(np.abs(a)):
-        return a, b
-    drop = int(np.argmax(np.abs(y)))
+    drop = int(np.argmax(np.abs(problem.left_null_vector())))
     keep = np.arange(len(b)) != drop
     return a[keep], b[keep]
-
-
-NULL_TOLERANCE = 1e-9
-"""y^T A below this (relative to A's largest entry) counts as zero: the feet's spin axes are
-vertical to rounding, and their moment impulses have no component along the feet line."""
 
 
 def _sign_constraints(problem: ImpactProblem) -> tuple[np.ndarray, np.ndarray]:

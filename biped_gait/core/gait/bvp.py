@@ -50,8 +50,9 @@ class ShootingProblem:
     for one (L m, T s, alpha rad, mode, step width m or None for the hips' spacing)."""
 
     def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode,
-                 step_width: float | None = None):
+                 step_width: float | None = None, closure_target: float = 0.0):
         self.hybrid, self.period = hybrid, period
+        self.closure_target = closure_target  # kg m^2/s: what the closure gap must be (see solve_bvp)
         self.configurations = boundary_configurations(hybrid.bm)
         self.n = hybrid.bm.nq
         self.step_length, self.alpha, self.mode, self.step_width = step_length, alpha, mode, step_width
@@ -82,7 +83,7 @@ class ShootingProblem:
         f = res.q - q_t
         impact = self.hybrid.impact(q_t) if with_theta else None
         if with_theta:
-            f = np.append(f, impact.closure_gap(u[:n], res.qd))
+            f = np.append(f, impact.closure_gap(u[:n], res.qd) - self.closure_target)
         if not jacobian:
             return f, None, res
         jac = np.zeros((n_unknown, n_unknown))
@@ -123,6 +124,7 @@ def solve_bvp(
     settings: Settings = DEFAULTS,
     coarse: BallisticFlow | None = None,
     step_width: float | None = None,
+    closure_target: float = 0.0,
 ) -> BvpSolution:
     """Solve the shooting problem on ``flow``'s grid; ``guess`` = (qd(0), theta) warm-starts it.
 
@@ -135,12 +137,15 @@ def solve_bvp(
     finished on ``flow``'s grid by chord steps with the coarse Jacobian, which the two grids
     share to within the coarse grid's error; if that stalls, Newton continues on the fine grid.
     ``settings.tolerance`` bounds the end-point residual (rad) and the closure gap (kg m^2/s).
-    ``step_width`` (m) places the feet (None: the hips' spacing).
+    ``step_width`` (m) places the feet (None: the hips' spacing). ``closure_target``
+    (kg m^2/s): the closure gap the solve makes (0: the momentum about the feet line conserved;
+    with the feet's spin axes tilted, minus what the ground's spin moments change of it,
+    ``ImpulseSolution.foot_line_moment``).
     """
     if closure not in CLOSURES:
         raise ValueError(f"unknown closure {closure!r}: use 'theta' or 'slack'")
     with_theta = closure == "theta"
-    system = ShootingProblem(hybrid, step_length, period, arm_amplitude, mode, step_width)
+    system = ShootingProblem(hybrid, step_length, period, arm_amplitude, mode, step_width, closure_target)
     nq = system.n
     n = nq + 1 if with_theta else nq
     tol, max_iter = settings.tolerance, settings.max_iterations

@@ -9,11 +9,11 @@ from __future__ import annotations
 import math
 from enum import Enum
 from functools import lru_cache
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..model.biped import BipedModel
+from ..model.rotations import euler, rotation
 
 
 class GaitMode(str, Enum):
@@ -51,18 +51,6 @@ def arm_angles(arm_amplitude: float, mode: GaitMode) -> tuple[float, float]:
     return sign * arm_amplitude, -sign * arm_amplitude
 
 
-if TYPE_CHECKING:
-    from scipy.spatial.transform import Rotation
-
-
-def _rotation(axis: str, angle: float) -> Rotation:
-    """The rotation by ``angle`` (rad) about ``axis`` (x or y), SciPy's ``Rotation``, imported
-    here: only lateral hips and turns need it, and importing scipy.spatial takes a plan process's time."""
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_rotvec([angle, 0.0, 0.0] if axis == "x" else [0.0, angle, 0.0])
-
-
 class BoundaryConfigurations:
     """q(0) (stance leg in front) and q(T) (swing leg in front, its tip at (L, w, 0)) of the straight
     gaits of ``bm`` at step length L (m), arm amplitude alpha (rad), mode, trunk pitch theta
@@ -84,7 +72,7 @@ class BoundaryConfigurations:
         self._swing = {role: index(role, "swing") for role in p.joints.hip_roles}
         self._roll, self._pitch = index("ankle_roll"), index("ankle_pitch")
         self._arms = (index("shoulder", "stance"), index("shoulder", "swing"))
-        self._sequence = "".join(p.joints.role(role).axis for role in p.joints.hip_roles).upper()
+        self._sequence = "".join(p.joints.role(role).axis for role in p.joints.hip_roles)
         self.theta_direction = np.zeros(bm.nq)
         """d q / d theta at the hips' spacing, the same at both ends: +1 on the stance hip's pitch,
         -1 on the swing hip's (the pelvis and trunk pitch, the legs stay)."""
@@ -122,19 +110,19 @@ class BoundaryConfigurations:
         stance foot (reach = L at T, -L at 0)."""
         lateral = step_width / 2 - self.bm.params.hip_half_width  # the stance hip beside its foot (m, +y)
         height = math.sqrt(self.leg_length ** 2 - reach ** 2 / 4 - lateral ** 2)
-        pelvis = _rotation("y", theta)
+        pelvis = rotation("y", theta)
 
-        def shin(dx: float, dy: float) -> tuple[float, float, Rotation]:
+        def shin(dx: float, dy: float) -> tuple[float, float, np.ndarray]:
             pitch = math.asin(dx / self.leg_length)
             roll = math.atan2(-dy, height)
-            return roll, pitch, _rotation("x", roll) * _rotation("y", pitch)
+            return roll, pitch, rotation("x", roll) @ rotation("y", pitch)
 
         roll, pitch, stance = shin(reach / 2, lateral)
         q[self._roll], q[self._pitch] = roll, pitch
-        for angle, role in zip((pelvis.inv() * stance).as_euler(self._sequence), self.bm.params.joints.hip_roles):
+        for angle, role in zip(euler(pelvis.T @ stance, self._sequence), self.bm.params.joints.hip_roles):
             q[self._stance[role]] = -angle  # the stance leg's coordinates are its joints' inverse rotations
         _, _, swing = shin(-reach / 2, -lateral)  # the other foot, from its own tip to its hip
-        for angle, role in zip((pelvis.inv() * swing).as_euler(self._sequence), self.bm.params.joints.hip_roles):
+        for angle, role in zip(euler(pelvis.T @ swing, self._sequence), self.bm.params.joints.hip_roles):
             q[self._swing[role]] = angle
 
     def theta_derivatives(self, step_length: float, arm_amplitude: float, mode: GaitMode, theta: float,

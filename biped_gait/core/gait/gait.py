@@ -69,6 +69,7 @@ class DoubleSupport:
     impulse_friction_ratios: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))
     max_intermediate_joint_rate: float = math.nan
     heading_change: float = 0.0  # rad: the next step's frame relative to this one's, mirrored (docs/model.md 5.2)
+    foot_line_moment: float = 0.0  # kg m^2/s: what the ground's spin moments change of the feet-line momentum
 
     @property
     def yaw_momentum_jump(self) -> float:

@@ -38,6 +38,7 @@ from .stride import solve_stride
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
 BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm start left the branch
+CLOSURE_ROUNDS = 10  # re-solves of the closure matched to the spin moments' share (2 to 4 suffice)
 CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride's continuation
 MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
 StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, qd_B(0), theta_2)
@@ -232,10 +233,18 @@ class GaitPlanner:
             if not straight.converged:
                 raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
             found, (guess, reached) = "continuation", self._curvature_path(problem, straight)
-        solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
-                                problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow)
-        a, b = solution.steps
-        steps = (self.step_gait(problem, a, found, b.qd_a), self.step_gait(problem, b, found, a.qd_a))
+        targets = (0.0, 0.0)
+        for _ in range(CLOSURE_ROUNDS):  # the closures matched to what the spin moments do (legs leaning)
+            solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
+                                    problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow, targets)
+            a, b = solution.steps
+            steps = (self.step_gait(problem, a, found, b.qd_a), self.step_gait(problem, b, found, a.qd_a))
+            if not all(g.double_support is not None and g.double_support.impulses.success for g in steps):
+                break
+            targets = tuple(-g.double_support.foot_line_moment for g in steps)
+            if max(abs(g.step.closure_gap - t) for g, t in zip(steps, targets)) <= self.settings.tolerance:
+                break
+            guess = (a.qd_a, a.theta, b.qd_a, b.theta)
         stability = None
         if all(g.double_support is not None and g.double_support.impulses.success for g in steps):
             maps = [PoincareMap(self.hybrid, self.flow, problem.period, g.double_support.impulses.i_minus,
@@ -319,6 +328,15 @@ class GaitPlanner:
         step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                          problem.mode, problem.closure, guess, self.settings, self.coarse_flow, problem.step_width)
         gait = self.step_gait(problem, step, found)
+        for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
+            ds = gait.double_support
+            if problem.closure != "theta" or ds is None or not ds.impulses.success or \
+                    abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
+                break
+            step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
+                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
+                             problem.step_width, closure_target=-ds.foot_line_moment)
+            gait = self.step_gait(problem, step, found)
         if gait.double_support is not None and gait.double_support.impulses.success:
             impulses = gait.double_support.impulses
             gait = replace(gait, stability=open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
@@ -371,6 +389,7 @@ class GaitPlanner:
             impulse_friction_ratios=friction_ratios(sol),
             max_intermediate_joint_rate=float(np.max(np.abs(sol.joint_rates))),
             heading_change=self.hybrid.exchange.heading(q_t),
+            foot_line_moment=sol.foot_line_moment(lp) if sol.success else 0.0,
         )
 
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:

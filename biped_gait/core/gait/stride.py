@@ -47,16 +47,24 @@ class StrideProblem:
     theta_2], and its Jacobian, for one (L m, T s, alpha rad, mode, R m)."""
 
     def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode,
-                 radius: float):
+                 radius: float, closure_targets: tuple[float, float] = (0.0, 0.0)):
         self.hybrid, self.period, self.radius = hybrid, period, radius
+        self.closure_targets = closure_targets  # kg m^2/s at C1 and C2 (``bvp.solve_bvp``'s closure_target)
         self.turning = TurningConfiguration(hybrid.bm)
         self.n = hybrid.bm.nq
         self.step_length, self.alpha, self.mode = step_length, alpha, mode
         self.evaluations = 0
 
+    @property
+    def lean(self) -> float:
+        """The body's lean into the turn at the double supports (rad): atan(v^2 / (g |R|)), v = L / T,
+        the lean of a body whose weight and centripetal force add up along it."""
+        speed = self.step_length / self.period
+        return math.atan(speed * speed / (self.hybrid.bm.params.gravity * abs(self.radius)))
+
     def touchdown(self, theta: float, which: int) -> np.ndarray:
         """C1 (``which`` 0, radius R) or C2 (1, radius -R) at trunk pitch ``theta``."""
-        return self.turning(self.step_length, self.alpha, self.mode, theta, self.radius * (1 - 2 * which))
+        return self.turning(self.step_length, self.alpha, self.mode, theta, self.radius * (1 - 2 * which), self.lean)
 
     def split(self, u: np.ndarray) -> tuple[tuple[np.ndarray, float], tuple[np.ndarray, float]]:
         n = self.n
@@ -89,7 +97,7 @@ class StrideProblem:
             runs.append(run)
         for k, (run, (_, q_t)) in enumerate(zip(runs, ends)):
             next_qd = steps[1 - k][0]
-            f += [run.q - q_t, [self.hybrid.impact(q_t).closure_gap(next_qd, run.qd)]]
+            f += [run.q - q_t, [self.hybrid.impact(q_t).closure_gap(next_qd, run.qd) - self.closure_targets[k]]]
         f = np.concatenate(f)
         if not jacobian:
             return f, None, runs
@@ -115,11 +123,14 @@ class StrideProblem:
 
 def solve_stride(hybrid: HybridStep, flow: BallisticFlow, step_length: float, period: float, arm_amplitude: float,
                  mode: GaitMode, radius: float, guess: tuple[np.ndarray, float, np.ndarray, float],
-                 settings: Settings = DEFAULTS, coarse: BallisticFlow | None = None) -> StrideSolution:
+                 settings: Settings = DEFAULTS, coarse: BallisticFlow | None = None,
+                 closure_targets: tuple[float, float] = (0.0, 0.0)) -> StrideSolution:
     """Solve the stride from ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) on ``flow``'s grid:
     Newton on ``coarse`` (if given) finished by chord steps on ``flow``, else Newton on ``flow``.
-    ``settings.tolerance`` bounds the end-point residuals (rad) and the closure gaps (kg m^2/s)."""
-    system = StrideProblem(hybrid, step_length, period, arm_amplitude, mode, radius)
+    ``settings.tolerance`` bounds the end-point residuals (rad) and the closure gaps' distance to
+    ``closure_targets`` (kg m^2/s, at C1 and C2: what the spin moments change, as in
+    ``bvp.solve_bvp``)."""
+    system = StrideProblem(hybrid, step_length, period, arm_amplitude, mode, radius, closure_targets)
     u0 = np.concatenate([guess[0], [guess[1]], guess[2], [guess[3]]])
     tol = settings.tolerance
     newton_flow = coarse or flow

@@ -31,6 +31,7 @@ import pinocchio as pin
 
 from .biped import SWING_TIP, BipedModel
 from .joints import Coordinate
+from .rotations import euler, rotation
 
 MIRROR = np.diag([1.0, -1.0, 1.0])  # y -> -y: the next step is the mirror image of this one
 
@@ -49,7 +50,7 @@ def world_axes(stance_side: str, heading: float = 0.0) -> np.ndarray:
     (``mirror_for``). World vectors are ``world_axes @`` model vectors (axial vectors with the
     determinant as a factor)."""
     mirror = mirror_for(stance_side)
-    return mirror if heading == 0.0 else _rz(heading) @ mirror
+    return mirror if heading == 0.0 else rotation("z", heading) @ mirror
 
 
 def next_heading(heading: float, next_side: str, turn: float) -> float:
@@ -142,11 +143,6 @@ def _gimbal(roll: float, pitch: float) -> np.ndarray:
     return np.array([[1.0, 0.0, sp], [0.0, cr, -sr * cp], [0.0, sr, cr * cp]])
 
 
-def _rz(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 class KinematicExchange:
     """The leg exchange of legs with lateral hip joints, from the kinematics (module docstring).
     Not thread-safe (Pinocchio data reused)."""
@@ -163,12 +159,9 @@ class KinematicExchange:
 
     def _landing(self, q: np.ndarray) -> tuple[float, float, float]:
         """(phi, roll, pitch) of the landing shin at ``q``: M R M = Rz(phi) Rx(roll) Ry(pitch)."""
-        from scipy.spatial.transform import Rotation  # here: importing scipy.spatial takes a plan process's time
-
         pin.forwardKinematics(self.bm.single, self.single_data, q)
-        rotation = MIRROR @ self.single_data.oMi[self.shin].rotation @ MIRROR
-        phi, roll, pitch = Rotation.from_matrix(rotation).as_euler("ZXY")
-        return float(phi), float(roll), float(pitch)
+        landing = MIRROR @ self.single_data.oMi[self.shin].rotation @ MIRROR
+        return euler(landing, "zxy")
 
     def configuration(self, q: np.ndarray) -> np.ndarray:
         """The next step's configuration (rad) of the touchdown configuration ``q``."""
@@ -187,7 +180,7 @@ class KinematicExchange:
         """Rates (roll, pitch, spin) of the next step's ankle per angular velocity (this step's
         frame, world axes) of the landing shin (3 x 3)."""
         phi, roll, pitch = self._landing(q)
-        return np.linalg.solve(_gimbal(roll, pitch), _rz(phi).T @ -MIRROR)
+        return np.linalg.solve(_gimbal(roll, pitch), rotation("z", phi).T @ -MIRROR)
 
     def _shin_angular(self, q: np.ndarray) -> np.ndarray:
         """The landing shin's angular velocity (world axes) as rows over X (3 x nX)."""
@@ -222,7 +215,7 @@ class KinematicExchange:
         pin.computeJointJacobians(model, data, q_next)
         pin.updateFramePlacements(model, data)
         twist = pin.getFrameJacobian(model, data, self.tip, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED) @ qd_next
-        back = MIRROR @ _rz(self.heading(q))
+        back = MIRROR @ rotation("z", self.heading(q))
         out = np.zeros((bm.double_support.nv,) + np.shape(qd_next)[1:])
         out[:3] = back @ twist[:3]
         out[3:6] = np.linalg.solve(_gimbal(q[self.roll], q[self.pitch]), -back @ twist[3:])
