@@ -31,9 +31,9 @@ import pinocchio as pin
 from scipy.integrate import solve_ivp
 from scipy.optimize import linprog
 
-from biped_gait.core.dynamics.hybrid import P_INVERSE
 from biped_gait.core.gait.configurations import GaitMode, boundary_configurations
 from biped_gait.core.model.biped import STANCE_TIP, SWING_TIP, BipedModel
+from biped_gait.core.model.exchange import exchange_matrix
 from biped_gait.core.model.params import load_params
 
 REFERENCE_COLD_SOLVE_S = 0.2  # s: the cold solve on the reference machine (issue 21)
@@ -83,7 +83,8 @@ class ColdSolve:
         self.single, self.extended = bm.single, bm.extended
         self.data, self.extended_data = self.single.createData(), self.extended.createData()
         self.period = period
-        self.q0, self.q_t = boundary_configurations(step_length, bm.params.leg_length, alpha, mode, 0.0)
+        self.q0, self.q_t = boundary_configurations(bm)(step_length, alpha, mode, 0.0)
+        self.exchange_inverse = np.linalg.inv(exchange_matrix(bm.coordinates))
         self._zero = np.zeros(self.single.nv)
 
     def _rhs(self, _t: float, y: np.ndarray) -> np.ndarray:
@@ -135,7 +136,7 @@ class ColdSolve:
         z = np.zeros(12)
         z[3:5] = tip[:2] / np.linalg.norm(tip)  # unit rotation about the foot-to-foot line
         xd_b = np.concatenate([np.zeros(3), qd_end])
-        qd_next = P_INVERSE @ qd0
+        qd_next = self.exchange_inverse @ qd0
         xd_a = np.concatenate([-j2[:, 3:] @ qd_next, qd_next])
         b_e = np.vstack([np.zeros((5, 7)), np.eye(7)])
         o = np.zeros
