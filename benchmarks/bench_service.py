@@ -51,7 +51,8 @@ def bare_server() -> None:
     spun by ``spin_once`` until killed."""
     rclpy.init()
     node = rclpy.create_node("bench_bare_services")
-    plan = plan_msg(GaitPlanner().plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header())
+    planner = GaitPlanner()
+    plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header(), urdf_joints(planner.model))
     compact = without_trajectory(plan)
 
     def trigger(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:

@@ -182,7 +182,7 @@ class GaitPlannerNode(Node):
             for group in GROUPS:
                 planner = GaitPlanner(self._default_params, self.settings, on_note=self.get_logger().warning)
                 self._planners[(group, self._default_params)] = planner
-                plan_msg(planner.plan(GaitRequest(*SEED)), self._header())
+                plan_msg(planner.plan(GaitRequest(*SEED)), self._header(), urdf_joints(planner.model))
         except Exception as exc:  # noqa: BLE001  a request meets the same failure and answers it
             self.get_logger().warning(f"preparing the planners failed: {clip(repr(exc))}")
         finally:
