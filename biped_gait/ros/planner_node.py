@@ -137,7 +137,7 @@ class GaitPlannerNode(Node):
         self._in_flight = InFlight()
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
-        self._prepared = threading.Event()
+        self._prepared = {group: threading.Event() for group in GROUPS}
         threading.Thread(target=self._prepare, name="prepare_planners", daemon=True).start()
         self.recorder: BackgroundRecorder | None = None
         if value["record"]:
@@ -175,25 +175,26 @@ class GaitPlannerNode(Node):
         )
 
     def _prepare(self) -> None:
-        """Make the default parameter set's planner of each group and plan the seed gait with it,
-        the plan's message included (what a process does once: atlases, caches, first calls), so
-        that the first request costs what the next ones do; then let ``_planner`` hand them out."""
-        try:
-            for group in GROUPS:
+        """Make the default parameter set's planner of each group (the service's first) and plan
+        the seed gait with it, the plan's message included (what a process does once: atlases,
+        caches, first calls), so that the first request costs what the next ones do; each is
+        handed out by ``_planner`` once ready."""
+        for group in GROUPS:
+            try:
                 planner = GaitPlanner(self._default_params, self.settings, on_note=self.get_logger().warning)
                 self._planners[(group, self._default_params)] = planner
                 plan_msg(planner.plan(GaitRequest(*SEED)), self._header(), urdf_joints(planner.model))
-        except Exception as exc:  # noqa: BLE001  a request meets the same failure and answers it
-            self.get_logger().warning(f"preparing the planners failed: {clip(repr(exc))}")
-        finally:
-            self._prepared.set()
+            except Exception as exc:  # noqa: BLE001  a request meets the same failure and answers it
+                self.get_logger().warning(f"preparing the {group}'s planner failed: {clip(repr(exc))}")
+            finally:
+                self._prepared[group].set()
 
     def _planner(self, params: str, group: str) -> GaitPlanner:
         """The planner of ``group`` for parameter set ``params`` (the default set's made at
         start-up, ``_prepare``: waited for; any other on first use)."""
         if params != self._default_params and params not in shipped_param_names():
             raise ValueError(f"unknown parameter set {clip(repr(params))}: give one of {', '.join(shipped_param_names())}")
-        self._prepared.wait()
+        self._prepared[group].wait()
         key = (group, params)
         if key not in self._planners:
             self._planners[key] = GaitPlanner(params, self.settings, on_note=self.get_logger().warning)
