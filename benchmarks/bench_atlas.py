@@ -5,8 +5,8 @@
    (``plan(..., cold=True)``: the straight-line start, what ``plan`` did before the atlas) of the
    same requests, in the same run; how each gait was found; how many cold solves end on the
    backward-knee twin or nowhere while the atlas answers.
-2. The Fig. 4 study (186 gaits, six chains) on local worker processes, beside the time of 25
-   cold solves measured in the same run (the yardstick of issue 10).
+2. The Fig. 4 study (186 gaits, six chains) on local worker processes, as a count of the
+   straightforward cold solves (``yardsticks.ColdSolve``) measured in the same run.
 3. The shipped atlases: build time (recorded when built) and file size.
 
     .venv/bin/python benchmarks/bench_atlas.py [--requests N] [--workers N]
@@ -15,7 +15,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import statistics
 import time
 import warnings
@@ -28,6 +27,7 @@ from biped_gait.core.model.params import load_params, shipped_param_names
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.studies.executors import check_workers
 from bench_study import time_study  # this folder's Fig. 4 timing
+from yardsticks import ColdSolve, median_s
 
 
 def random_requests(count: int, seed: int = 7) -> list[GaitRequest]:
@@ -72,12 +72,12 @@ def main() -> None:
     print(f"  {admissible} requests admissible; the cold solve is not admissible for {cold_wrong} of them "
           "(backward-knee twin or no convergence)")
 
-    yardstick = [timed(lambda: planner.plan(GaitRequest(0.45, 0.45, math.radians(a)), cold=True))[0]
-                 for a in np.linspace(10.0, 34.0, 25)]
+    cold = ColdSolve()
+    yardstick = median_s(cold.solve, 5)
     workers = check_workers(args.workers)
     study, _, grid = time_study(workers)
-    print(f"Fig. 4 study: {grid.size} gaits on {workers} worker processes: {study:.2f} s wall "
-          f"(25 cold solves in this run: {sum(yardstick):.2f} s; ratio {study / sum(yardstick):.2f})")
+    print(f"Fig. 4 study: {grid.size} gaits on {workers} worker processes: {study:.2f} s wall = "
+          f"{study / yardstick:.1f} straightforward cold solves ({1e3 * yardstick:.1f} ms each, this run)")
 
     for name in shipped_param_names():
         params = load_params(name)

@@ -4,7 +4,8 @@ Prints the median cold time (``plan(cold=True)``: the straight-line start), the 
 the gait 1 deg of arm amplitude away, as in a sweep), the number of dynamics evaluations (ABA or
 ABA-derivative calls), and the median times of two parts of a solve: the impulse LP (HiGHS
 through highspy) and the step's figures (91 samples evaluated in one call, in the compiled twin
-and by the Python loops). Run:
+and by the Python loops); beside them the straightforward cold solve (``yardsticks.ColdSolve``)
+of this run. Run:
 
     .venv/bin/python benchmarks/bench_gait.py [--repeat N]
 """
@@ -23,16 +24,12 @@ from biped_gait.core.dynamics.impulses import solve_l1
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.gait.figures import energy_drift, step_figures
 from biped_gait.core.dynamics.samples import NativeSamples, SampleEvaluator
+from yardsticks import ColdSolve, median_s
 
 
 def median_ms(call, repeat: int) -> float:
     """Median wall time (ms) of ``call()`` over ``repeat`` calls."""
-    times = []
-    for _ in range(repeat):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return 1e3 * statistics.median(times)
+    return 1e3 * median_s(call, repeat)
 
 
 def main() -> None:
@@ -65,7 +62,9 @@ def main() -> None:
         previous = result
 
     ms = lambda xs: 1e3 * statistics.median(xs)  # noqa: E731
-    print(f"gait solve, L = T = 0.45, alpha 15..30 deg, {args.repeat} gaits, grid {planner.flow.steps} RK8 steps")
+    yardstick = median_ms(ColdSolve().solve, 5)
+    print(f"gait solve, L = T = 0.45, alpha 15..30 deg, {args.repeat} gaits, grid {planner.flow.steps} RK8 steps; "
+          f"the straightforward cold solve {yardstick:.1f} ms (this run): cold / warm = {yardstick / ms(warm):.1f}")
     print(f"  cold: median {ms(cold):7.2f} ms   dynamics evaluations {statistics.median(cold_evals):.0f}")
     print(f"  warm: median {ms(warm):7.2f} ms   dynamics evaluations {statistics.median(warm_evals):.0f}"
           f"   Newton iterations {statistics.median(iters):.0f}")

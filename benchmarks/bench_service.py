@@ -1,13 +1,14 @@
-"""Benchmark: the planner service's round trip from a client in another process, beside a bare
-rclpy service (std_srvs/Trigger, a node of a few lines spun by ``rclpy.spin``) measured in the
-same run, one call of each in turn (and the bare service and the cached plans also each alone,
-back to back): a cached request and uncached ones (each a different arm
-amplitude), with the planner
-recording and not, the whole plan and the plan without its trajectory's points
+"""Benchmark: the planner service's round trip from a client in another process, beside bare
+rclpy services measured in the same run (nodes of a few lines spun by ``spin_once`` loops: one
+answering std_srvs/Trigger, one answering PlanGait with the same response as the planner's, made
+once), one call of each in turn (and the bare services and the cached plans also each alone,
+back to back): a cached request and uncached ones (each a different arm amplitude), with the
+planner recording and not, the whole plan and the plan without its trajectory's points
 (``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
-(``--uncached-calls`` for the uncached). Also the client's and the server's share of the plan's
-size: one PlanGait response serialized and deserialized by rclpy in this process, and the
-direct core call. Run:
+(``--uncached-calls`` for the uncached). The first request of ``--fresh`` freshly started
+planners (uncached, sent as soon as the service is found and has refused a bad request) beside their next uncached ones. Also
+the client's and the server's share of the plan's size: one PlanGait response serialized and
+deserialized by rclpy in this process, and the direct core call. Run:
 
     .venv/bin/python benchmarks/bench_service.py [--calls 1000] [--uncached-calls 1000]
 """
@@ -40,21 +41,34 @@ from biped_gait.ros.planner_node import without_trajectory  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 
 TRIGGER = "/bench_bare_trigger"
+BARE_PLAN = "/bench_bare_plan_gait"
 ALPHA = math.radians(23.5)
 
 
-def trigger_server() -> None:
-    """The yardstick: a node with one Trigger service, spun by ``rclpy.spin`` until killed."""
+def bare_server() -> None:
+    """The yardsticks: a node with a Trigger service and a PlanGait service that answers every
+    request with the planner's response to the cached request (made once, before serving),
+    spun by ``spin_once`` until killed."""
     rclpy.init()
-    node = rclpy.create_node("bench_bare_trigger")
+    node = rclpy.create_node("bench_bare_services")
+    planner = GaitPlanner()
+    plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header(), urdf_joints(planner.model))
+    compact = without_trajectory(plan)
 
-    def answer(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
+    def trigger(_request: Trigger.Request, response: Trigger.Response) -> Trigger.Response:
         response.success, response.message = True, "ok"
         return response
 
-    node.create_service(Trigger, TRIGGER, answer)
+    def plan_gait(request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+        response.success, response.message = True, "admissible (found by atlas) (cached)"
+        response.plan = compact if request.omit_trajectory else plan
+        return response
+
+    node.create_service(Trigger, TRIGGER, trigger)
+    node.create_service(PlanGait, BARE_PLAN, plan_gait)
     try:
-        rclpy.spin(node)
+        while rclpy.ok():
+            rclpy.spin_once(node, timeout_sec=0.1)
     except (KeyboardInterrupt, rclpy.executors.ExternalShutdownException):
         pass
 
@@ -98,10 +112,36 @@ def conversion_ms(response: PlanGait.Response, repeat: int = 200) -> tuple[float
     return 1e3 * (middle - start) / repeat, 1e3 * (end - middle) / repeat, len(data)
 
 
+def first_requests(side: ClientSide, where: Path, fresh: int, calls: int = 10) -> tuple[list[float], list[float]]:
+    """Round trips (s) of the first plan request of ``fresh`` freshly started planners (recording
+    off), each sent as soon as the service is found and has answered a refused request (so that
+    DDS has matched the reply's path too, which a first call otherwise waits for), and of their
+    next ``calls`` uncached ones."""
+    first, after = [], []
+    for k in range(fresh):
+        proc = start_entry("biped-gait-planner", ["-r", f"__node:=bench_fresh_{k}", "-p", "record:=false"],
+                           log=where / f"fresh_{k}.log", cwd=where)
+        try:
+            client = side.node.create_client(PlanGait, f"/bench_fresh_{k}/plan_gait")
+            side.connect(client)
+            refused = side.call(client, PlanGait.Request(step_length=0.45, period=-1.0, arm_amplitude=ALPHA), timeout=60.0)
+            assert not refused.success
+            requests = [PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.35 + 1e-3 * j)
+                        for j in range(calls + 1)]
+            times = [round_trip(side, client, request) for request in requests]
+            first.append(times[0])
+            after.extend(times[1:])
+            side.node.destroy_client(client)
+        finally:
+            stop_process(proc)
+    return first, after
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=1000)
     parser.add_argument("--uncached-calls", type=int, default=1000)
+    parser.add_argument("--fresh", type=int, default=3)
     args = parser.parse_args()
     cached = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
     compact = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
@@ -109,8 +149,8 @@ def main() -> None:
     alone: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
-        trigger = subprocess.Popen([sys.executable, __file__, "--trigger-server"], stdout=subprocess.DEVNULL,
-                                   stderr=subprocess.DEVNULL)
+        with open(where / "bare.log", "wb") as log:
+            bare_process = subprocess.Popen([sys.executable, __file__, "--bare-server"], stdout=log, stderr=log)
         planners = {record: start_entry("biped-gait-planner", ["-r", f"__node:=bench_planner_{record}", "-p",
                                                                f"record:={record}", "-p", f"record_dir:={where}/bags"],
                                         log=where / f"planner_{record}.log", cwd=where)
@@ -118,12 +158,16 @@ def main() -> None:
         side = ClientSide("bench_service_client")
         try:
             bare = side.node.create_client(Trigger, TRIGGER)
+            bare_plan = side.node.create_client(PlanGait, BARE_PLAN)
             side.connect(bare)
+            side.connect(bare_plan)
             clients = {record: side.node.create_client(PlanGait, f"/bench_planner_{record}/plan_gait")
                        for record in planners}
             for client in clients.values():
                 side.connect(client)
             targets = {"bare Trigger service": (bare, Trigger.Request()),
+                       "bare PlanGait service, same response": (bare_plan, cached),
+                       "bare PlanGait service, no trajectory": (bare_plan, compact),
                        "cached, recording on": (clients["true"], cached),
                        "cached, recording off": (clients["false"], cached),
                        "cached, no trajectory, recording on": (clients["true"], compact),
@@ -131,19 +175,23 @@ def main() -> None:
             interleaved(side, targets, 20)  # solved once, then cached; warm-up
             results.update(interleaved(side, targets, args.calls))
             alone = {name: [round_trip(side, *targets[name]) for _ in range(args.calls)]
-                     for name in ("bare Trigger service", "cached, recording on", "cached, no trajectory, recording on")}
+                     for name in ("bare Trigger service", "bare PlanGait service, same response", "cached, recording on",
+                                  "bare PlanGait service, no trajectory", "cached, no trajectory, recording on")}
             for k in range(args.uncached_calls):
                 for record in ("true", "false"):
                     alpha = 0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0)
                     name = f"uncached, recording {'on' if record == 'true' else 'off'}"
                     results.setdefault(name, []).append(round_trip(
                         side, clients[record], PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
+            for proc in planners.values():
+                stop_process(proc)
+            first, after = first_requests(side, where, args.fresh)
         finally:
             side.close()
             for proc in planners.values():
                 stop_process(proc)
-            trigger.terminate()
-            trigger.wait()
+            bare_process.terminate()
+            bare_process.wait()
     solves = []
     planner = GaitPlanner()
     for k in range(20):
@@ -154,14 +202,23 @@ def main() -> None:
     conversions = {"whole": conversion_ms(PlanGait.Response(success=True, message="admissible", plan=plan)),
                    "without trajectory": conversion_ms(PlanGait.Response(success=True, message="admissible",
                                                                          plan=without_trajectory(plan)))}
-    bare = statistics.median(results["bare Trigger service"])
-    print("planner service round trip from another process (Fast DDS, localhost), beside a bare Trigger service:")
+    floors = {"": "bare PlanGait service, same response", "no trajectory": "bare PlanGait service, no trajectory"}
+
+    def ratios(times: dict[str, list[float]], name: str) -> str:
+        floor = floors["no trajectory" if "no trajectory" in name else ""]
+        trigger = statistics.median(times["bare Trigger service"]) if "bare Trigger service" in times else math.nan
+        return (f"{statistics.median(times[name]) / statistics.median(times[floor]):5.2f} x the bare PlanGait, "
+                f"{statistics.median(times[name]) / trigger:5.2f} x the bare Trigger")
+
+    print("planner service round trip from another process (Fast DDS, localhost), beside bare services:")
     for name, times in results.items():
-        print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare:5.2f} x the bare service)")
+        print(f"  {name:38s} {summary(times)}  ({ratios(results, name)})")
     print("each alone, back to back (each server busy with one client, no other call between):")
-    bare_alone = statistics.median(alone["bare Trigger service"])
     for name, times in alone.items():
-        print(f"  {name:38s} {summary(times)}  ({statistics.median(times) / bare_alone:5.2f} x the bare service)")
+        print(f"  {name:38s} {summary(times)}  ({ratios(alone, name)})")
+    print(f"freshly started planners ({args.fresh}): first request median {1e3 * statistics.median(first):.2f} ms "
+          f"({', '.join(f'{1e3 * t:.1f}' for t in first)}), the next uncached ones {1e3 * statistics.median(after):.2f} ms: "
+          f"first / next = {statistics.median(first) / statistics.median(after):.2f}")
     print(f"  direct core call GaitPlanner.plan (uncached): median {1e3 * statistics.median(solves):7.3f} ms")
     for what, (serialize, deserialize, size) in conversions.items():
         print(f"  one PlanGait response, {what} ({size} bytes): rclpy serializes it in {serialize:.3f} ms (server), "
@@ -169,7 +226,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--trigger-server"]:
-        trigger_server()
+    if sys.argv[1:] == ["--bare-server"]:
+        bare_server()
     else:
         main()

@@ -2,9 +2,11 @@
 10 steps of the default gait, planner and simulator as real node processes, with every topic
 published and recorded, and with recording off; beside it, in the same run, the walker alone
 (integration, events, double supports, samples: no world view, no ROS), the walker with the
-world view and the messages serialized (no ROS), the cold gait solve (the machine's yardstick)
-and the cost of one message each way. Each real-time factor is the median of ``--repeat`` runs
-(their range beside it): the machine is shared, and a run's figure moves with the load. Run:
+world view and the messages serialized (no ROS), the straightforward cold solve (the machine's
+yardstick, ``yardsticks.ColdSolve``: the node's factor is also given as it would be on the
+reference machine) and the cost of one message each way. Each real-time factor is the median of
+``--repeat`` runs (their range beside it), the runs interleaved with cold solves: the machine is
+shared, and a run's figure moves with the load. Run:
 
     .venv/bin/python benchmarks/bench_simulator.py [--steps N] [--repeat N]
 """
@@ -39,6 +41,7 @@ from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 from biped_gait.ros.walk_messages import SampleMessages  # noqa: E402
+from yardsticks import ColdSolve, at_reference, median_s  # noqa: E402
 
 RATE = 1000.0
 REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
@@ -50,17 +53,6 @@ def per_call_us(call, count: int = 20000) -> float:
     for _ in range(count):
         call()
     return 1e6 * (time.perf_counter() - start) / count
-
-
-def cold_solve_ms(planner: GaitPlanner, repeat: int = 7) -> float:
-    """Median time of a gait solve with no guess (ms), as benchmarks/bench_gait.py's cold solve."""
-    planner.plan(REQUEST, cold=True)
-    times = []
-    for alpha in np.radians(np.linspace(15.0, 30.0, repeat)):
-        start = time.perf_counter()
-        planner.plan(GaitRequest(0.45, 0.45, float(alpha), "normal"), cold=True)
-        times.append(time.perf_counter() - start)
-    return 1e3 * statistics.median(times)
 
 
 def core_factors(planner: GaitPlanner, steps: int) -> tuple[float, float]:
@@ -149,8 +141,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     planner = GaitPlanner()
-    cold = cold_solve_ms(planner)
-    walker, encoded, recorded, unrecorded = [], [], [], []
+    yardstick = ColdSolve()
+    yardstick.solve()
+    walker, encoded, recorded, unrecorded, colds = [], [], [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
         for run in range(args.repeat):  # interleaved, so that a change of load falls on all alike
@@ -159,12 +152,15 @@ def main() -> None:
             encoded.append(encoded_rtf)
             recorded.append(node_factor(where / f"run{run}", args.steps, record=True))
             unrecorded.append(node_factor(where / f"run{run}", args.steps, record=False))
+            colds.extend(median_s(yardstick.solve, 1) for _ in range(2))
         costs = message_costs(where)
     simulated = args.steps * REQUEST.period
     median = statistics.median
+    cold = median(colds)
     print(f"simulator at {RATE:g} Hz, {args.steps} steps ({simulated:.2f} s simulated), as fast as possible, "
-          f"median of {args.repeat} runs [range]; cold gait solve on this machine: {cold:.1f} ms (median)")
-    print(f"  node, every topic published and recorded: real-time factor {factors(recorded)}")
+          f"median of {args.repeat} runs [range]; the straightforward cold solve: {1e3 * cold:.1f} ms (median)")
+    print(f"  node, every topic published and recorded: real-time factor {factors(recorded)}; on the reference machine "
+          f"{at_reference(median(recorded), cold):.1f}")
     print(f"  node, published, recording off:           real-time factor {factors(unrecorded)}")
     print(f"  walker alone (no world view, no ROS):     real-time factor {factors(walker)}; "
           f"node with recording / walker alone = {median(recorded) / median(walker):.2f}")

@@ -17,16 +17,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import numpy as np
-from tqdm import tqdm
-
 from .core.gait.atlas import Atlas, AtlasError, Grid, atlas_path, rebuild_command
 from .core.gait.turning_atlas import TurningAtlas, TurningGrid, turning_atlas_path
 from .core.gait.configurations import GaitMode
 from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
-from .studies.atlas_build import build_atlas
-from .studies.turning_atlas_build import build_turning_atlas
-from .studies.executors import open_executor
 
 MODES = [m.value for m in GaitMode]
 
@@ -63,6 +57,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"biped-gait: parameter set {params.name} walks straight only: a turning atlas needs hip roll and yaw "
               "joints (e.g. aoustin2013-hips)", file=sys.stderr)
         return 2
+    import numpy as np  # the build's own imports, here: the other verbs and --help do without them
+    from tqdm import tqdm
+
+    from .studies.atlas_build import build_atlas
+    from .studies.executors import open_executor
+    from .studies.turning_atlas_build import build_turning_atlas
+
     for mode in modes:
         kind = "-turning" if args.turning else ""
         where = turning_atlas_path if args.turning else atlas_path

@@ -5,7 +5,9 @@ gaits to CSV, JSON and PNG), ``optimize-arms`` (the arm amplitude of least effor
 (build, show, check the gait atlases the planner starts from, ``atlas_cli``); ``push-study``
 (the largest push on the trunk the walker recovers from, per direction and arm amplitude);
 ``mjcf`` and ``check-mujoco`` (the second engine, ``mujoco_cli``).
-Degrees at this edge; SI and radians inside.
+Degrees at this edge; SI and radians inside. Each verb imports what only it uses (matplotlib, the
+study modules, the MCAP readers, MuJoCo) when it runs, so that ``plan`` and ``--help`` cost about
+what importing NumPy, SciPy, Pinocchio and HiGHS does.
 
 Errors in the input print one line on stderr and exit with status 2, output paths included
 (checked before any work: a folder that cannot be written, a sweep folder holding an earlier
@@ -21,22 +23,15 @@ import math
 import sys
 from pathlib import Path
 
-from tqdm import tqdm
-
 from . import atlas_cli, mujoco_cli
 from .arguments import OneLineParser, check_output_file, check_output_folder
 from .core.gait import views
 from .core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
 from .core.gait.planner import GaitPlanner, GaitRequest, validate_request
 from .core.model.urdf import make_urdf
-from .recording.recover import check_mcap, is_complete, recover
 from .studies.executors import open_executor
-from .studies.figures import save, sweep_figures
 from .studies.optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, optimal_arm_amplitude
-from .studies.maps import compute_maps, reading
 from .studies import push_study
-from .studies.results_page import maps_figures, write_results_page
-from .studies.study import FIG4_CASES, FIG5_CASE, run_study
 from .studies.sweep import MAX_CASES, SweepGrid, inclusive_range, solve_grid
 from .studies.sweep_output import SweepFiles, remove_previous
 
@@ -194,6 +189,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _sweep(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
+    from .studies.figures import sweep_figures
+
     alphas_deg = _axis(args, "alpha-deg", "arm amplitude")
     grid = SweepGrid.build(
         load_params(args.params),
@@ -243,6 +242,9 @@ def _optimize_arms(args: argparse.Namespace) -> int:
 
 
 def _figure(args: argparse.Namespace) -> int:
+    from .studies.figures import save
+    from .studies.study import FIG4_CASES, FIG5_CASE, run_study
+
     params = load_params(args.params)
     fig4 = args.name == "fig4"
     out = args.out or Path(f"{args.name}.png")
@@ -258,6 +260,8 @@ def _figure(args: argparse.Namespace) -> int:
 
 
 def _push_study(args: argparse.Namespace) -> int:
+    from .studies.figures import save
+
     params = load_params(args.params)
     validate_request(GaitRequest(args.step_length, args.period, 0.0, args.mode), params)
     if not 0.0 <= args.phase < 1.0:
@@ -267,6 +271,7 @@ def _push_study(args: argparse.Namespace) -> int:
         raise ValueError(f"--momentum-rate must be below 1, got {args.momentum_rate:g}")
     check_output_folder(args.out, "--out", force=True)
     push_study.study_cases([], args.directions)  # the names checked before any work
+
     if args.alpha_deg is None:
         optimum = optimal_arm_amplitude(GaitPlanner(params), args.step_length, args.period, args.mode)
         alphas = [0.0, optimum.alpha]
@@ -288,6 +293,8 @@ def _push_study(args: argparse.Namespace) -> int:
 
 
 def _results_page(args: argparse.Namespace) -> int:
+    from .studies.results_page import write_results_page
+
     check_output_file(args.out, "--out")
     inclusive_range(0.0, 45.0, args.walk_alpha_step, "--walk-alpha-step's")  # checked before any work
     with open_executor(args.workers, args.scheduler) as executor:
@@ -297,6 +304,10 @@ def _results_page(args: argparse.Namespace) -> int:
 
 
 def _maps(args: argparse.Namespace) -> int:
+    from .studies.figures import save
+    from .studies.maps import compute_maps, reading
+    from .studies.results_page import maps_figures
+
     params = load_params(args.params)
     with open_executor(args.workers, args.scheduler) as executor:
         maps = compute_maps(params, executor)
@@ -307,6 +318,8 @@ def _maps(args: argparse.Namespace) -> int:
 
 
 def _recover(args: argparse.Namespace) -> int:
+    from .recording.recover import check_mcap, is_complete, recover
+
     files = sorted(args.bag.glob("*.mcap")) if args.bag.is_dir() else [args.bag]
     if not files or not files[0].is_file():
         raise ValueError(f"no MCAP file at {args.bag}")

@@ -16,6 +16,7 @@ import pytest
 from biped_gait.core.gait.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path
 from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait.continuation import continue_to
+from biped_gait.core.gait.fingerprint import code_fingerprint
 from biped_gait.core.model.params import load_params, shipped_param_names
 from biped_gait.core.gait.planner import SEED, GaitPlanner, GaitRequest
 from biped_gait.studies.atlas_build import build_atlas
@@ -127,6 +128,21 @@ def test_a_corrupt_or_stale_atlas_is_refused_with_the_rebuild_command(small_atla
     with pytest.raises(AtlasError, match="no gait atlas at"):
         Atlas.load(tmp_path / "missing.npz", params)
     assert zipfile.is_zipfile(path)
+
+
+def test_an_atlas_of_this_very_code_is_current_without_parsing_the_code(small_atlas, tmp_path):
+    """Its source fingerprint (the code's bytes) says so; an atlas whose source fingerprint
+    differs (the code's comments changed since, say) is still current by its model fingerprint."""
+    params = load_params()
+    code_fingerprint.cache_clear()
+    Atlas.load(small_atlas.save(tmp_path / "same.npz"), params, "aoustin2013")
+    assert code_fingerprint.cache_info().misses == 0
+    other = dataclasses.replace(small_atlas, source="built from other bytes").save(tmp_path / "other.npz")
+    back = Atlas.load(other, params, "aoustin2013")
+    assert code_fingerprint.cache_info().misses == 1 and back.source == "built from other bytes"
+    stale = dataclasses.replace(small_atlas, fingerprint="0" * 64, source="").save(tmp_path / "stale.npz")
+    with pytest.raises(AtlasError, match="stale"):
+        Atlas.load(stale, params, "aoustin2013")
 
 
 def test_without_an_atlas_the_planner_continues_from_the_seed():

@@ -30,6 +30,20 @@ def test_plan_defaults_prints_a_converged_admissible_gait(tmp_path):
     assert data["converged"] and data["admissible"] and data["W"] > 0
 
 
+def test_plan_and_help_import_only_what_they_use():
+    """No plotting, progress bars, MCAP, study modules, OSQP or SciPy's optimize for one gait or
+    a verb's help (they cost a plan process more than its solve)."""
+    heavy = ("matplotlib", "tqdm", "mcap", "osqp", "scipy.optimize", "scipy.sparse", "dask", "rclpy",
+             "biped_gait.studies.study", "biped_gait.studies.maps", "biped_gait.studies.results_page")
+    for argv in (["plan"], ["sweep", "--help"], ["push-study", "--help"], ["atlas", "build", "--help"]):
+        code = ("import contextlib, io, sys\nfrom biped_gait.cli import main\n"
+                f"with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit): main({argv!r})\n"
+                f"print(sorted(name for name in sys.modules if name.split('.')[0] in {heavy!r} or name in {heavy!r}))")
+        proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.strip() == "[]", (argv, proc.stdout)
+
+
 def test_plan_options_reach_the_core():
     proc = run("plan", "--step-length", "0.40", "--arm-amplitude", "20", "--mode", "anti-normal",
                "--params", "aoustin2013-table", "--closure", "slack", "--effort", "l2")

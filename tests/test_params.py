@@ -8,7 +8,8 @@ import pytest
 import yaml
 
 from biped_gait.core.model.biped import BipedModel
-from biped_gait.core.model.params import load_params, shipped_param_names
+from biped_gait.core.model.params import load_params, params_from_dict, shipped_param_names
+from biped_gait.core.model.yaml_files import parse_package_yaml, parse_yaml
 
 pytestmark = pytest.mark.core
 
@@ -87,3 +88,10 @@ def test_non_physical_files_are_refused(tmp_path, edit, message):
 def test_unknown_name_is_refused():
     with pytest.raises(ValueError, match="unknown parameter set 'nope'"):
         load_params("nope")
+
+
+@pytest.mark.parametrize("name", shipped_param_names())
+def test_a_shipped_set_reads_the_same_by_libyaml_as_by_the_checked_parser(name):
+    text = resources.files("biped_gait.core.data").joinpath(f"{name}.yaml").read_text()
+    assert parse_package_yaml(text) == parse_yaml(text, name)
+    assert load_params(name) == params_from_dict(parse_yaml(text, name), name)

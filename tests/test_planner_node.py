@@ -114,6 +114,14 @@ BAD_REQUESTS = [
 ]
 
 
+def test_the_planners_made_at_start_up_answer_the_first_request(ros, node_dir, default_gait):
+    """The node makes its planners (and plans a gait with each) while it comes up: no failure
+    said in its log once it has answered."""
+    response = ros.call(ros.client, plan_request())
+    assert response.success and response.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
+    assert "planner failed" not in (node_dir / "biped-gait-planner.log").read_text()
+
+
 def test_bad_requests_are_refused_and_the_node_keeps_serving(ros, default_gait):
     for request, message in BAD_REQUESTS:
         response = ros.call(ros.client, request)

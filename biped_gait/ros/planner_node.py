@@ -13,7 +13,10 @@ A thin node: requests are converted and handed to the core (``GaitPlanner``); no
 sends can stop it (bad input gets ``success = false`` and a message; text from a request is
 clipped in the log). The service's request queue holds ``queue_depth`` requests, so that a
 burst is answered, not dropped. A recording that fails (disk full, folder not writable or
-deleted) is one error line and the node keeps serving without recording.
+deleted) is one error line and the node keeps serving without recording. The default parameter
+set's planners (the service's and the action's, with their atlases) are made at start-up by a
+thread of their own, while the node comes up, so that the first request is answered at the speed
+of the next ones; a request that comes before they are ready waits for them.
 """
 
 from __future__ import annotations
@@ -42,7 +45,7 @@ from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
-from ..core.gait.planner import GaitPlanner
+from ..core.gait.planner import SEED, GaitPlanner, GaitRequest
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.text import clip
 from ..recording.background import BackgroundRecorder
@@ -57,6 +60,7 @@ from .recorded import RecordedPublisher
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
 CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms)
+GROUPS = ("service", "action")  # who owns a planner: the service's callbacks, the action's
 PARAMETERS = (
     Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
           f"{', '.join(shipped_param_names())} or the path of a YAML file"),
@@ -133,6 +137,8 @@ class GaitPlannerNode(Node):
         self._in_flight = InFlight()
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
+        self._prepared = {group: threading.Event() for group in GROUPS}
+        threading.Thread(target=self._prepare, name="prepare_planners", daemon=True).start()
         self.recorder: BackgroundRecorder | None = None
         if value["record"]:
             stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
@@ -168,10 +174,27 @@ class GaitPlannerNode(Node):
             cancel_service_qos_profile=queue,
         )
 
+    def _prepare(self) -> None:
+        """Make the default parameter set's planner of each group (the service's first) and plan
+        the seed gait with it, the plan's message included (what a process does once: atlases,
+        caches, first calls), so that the first request costs what the next ones do; each is
+        handed out by ``_planner`` once ready."""
+        for group in GROUPS:
+            try:
+                planner = GaitPlanner(self._default_params, self.settings, on_note=self.get_logger().warning)
+                self._planners[(group, self._default_params)] = planner
+                plan_msg(planner.plan(GaitRequest(*SEED)), self._header(), urdf_joints(planner.model))
+            except Exception as exc:  # noqa: BLE001  a request meets the same failure and answers it
+                self.get_logger().warning(f"preparing the {group}'s planner failed: {clip(repr(exc))}")
+            finally:
+                self._prepared[group].set()
+
     def _planner(self, params: str, group: str) -> GaitPlanner:
-        """The planner of ``group`` for parameter set ``params`` (created on first use)."""
+        """The planner of ``group`` for parameter set ``params`` (the default set's made at
+        start-up, ``_prepare``: waited for; any other on first use)."""
         if params != self._default_params and params not in shipped_param_names():
             raise ValueError(f"unknown parameter set {clip(repr(params))}: give one of {', '.join(shipped_param_names())}")
+        self._prepared[group].wait()
         key = (group, params)
         if key not in self._planners:
             self._planners[key] = GaitPlanner(params, self.settings, on_note=self.get_logger().warning)

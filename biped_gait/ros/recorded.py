@@ -5,10 +5,12 @@ A recorded-only message is serialized on the recorder's writer thread, off the c
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 from rclpy.node import Node
+from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, QoSProfile
 
 from ..recording.background import BackgroundRecorder
@@ -18,6 +20,15 @@ from .qos import describe
 
 if TYPE_CHECKING:  # the live view's SDK is loaded only where a live view runs
     from .live_view import LiveView
+
+
+@contextmanager
+def raw_sender(publisher: Publisher) -> Iterator[Callable[[bytes], None]]:
+    """``publisher``'s publish of serialized bytes for many messages in a row (a step's samples),
+    its handle held once for all of them: rclpy's ``publish`` takes it for each message, which is
+    half of its cost."""
+    with publisher.handle:
+        yield publisher.handle.publish_raw
 
 
 class RecordedPublisher:
@@ -58,6 +69,25 @@ class RecordedPublisher:
             self.publisher.publish(data)
         if self.live is not None:
             self.live.log(self.topic, data, stamp_ns)
+
+    @contextmanager
+    def sending(self) -> Iterator[Callable[[bytes, int], None]]:
+        """``send`` for many messages in a row (a step's samples), the publisher's handle held
+        once for all of them (``raw_sender``)."""
+        if self.publisher is None:
+            yield self.send
+            return
+        with raw_sender(self.publisher) as publish:
+            if self.live is None:
+                yield lambda data, _stamp_ns: publish(data)
+            else:
+                live, topic = self.live, self.topic
+
+                def send(data: bytes, stamp_ns: int) -> None:
+                    publish(data)
+                    live.log(topic, data, stamp_ns)
+
+                yield send
 
     def subscription_count(self) -> int:
         """Subscribers matched to the live publisher (0 if recorded only)."""

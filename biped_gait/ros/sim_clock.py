@@ -32,7 +32,3 @@ class SimClock:
     def encode(self, stamps_ns: np.ndarray) -> np.ndarray:
         """The serialized Clock messages of ``stamps_ns`` (ns), one row each."""
         return self._template.encode(np.zeros((len(stamps_ns), 0)), stamp_ints(stamps_ns))
-
-    def publish(self, data: bytes) -> None:
-        """Publish one serialized Clock message."""
-        self.publisher.publish(data)

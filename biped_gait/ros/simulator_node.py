@@ -41,6 +41,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from contextlib import ExitStack
 from dataclasses import replace
 from datetime import datetime, timezone
 
@@ -70,7 +71,8 @@ from ..core.dynamics.settings import DEFAULTS
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
-from ..core.walking.walk import CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk
+from ..core.walking.walk import (CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk,
+                                 prepare_walking)
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
@@ -82,7 +84,7 @@ from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
 from .push_service import SCRIPT_FORMAT, PushScheduler, parse_pushes
-from .recorded import RecordedPublisher
+from .recorded import RecordedPublisher, raw_sender
 from .sim_clock import SimClock
 from .sim_controls import SimControls
 from .speed_command import SpeedCommand
@@ -151,6 +153,7 @@ class SimulatorNode(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
         self.value = value = declare(self, PARAMETERS)
+        prepare_walking()  # what the walk loads once, now rather than when it starts
         self.pushes = PushScheduler(parse_pushes(value["pushes"]))
         self.source = value["plan_source"]
         self.rate = value["publish_rate"]
@@ -447,14 +450,13 @@ class SimulatorNode(Node):
     def _publish_step(self, step: StepSamples, base_ns: int, offset: float, pacer: Pacer) -> bool:
         """Publish (and show) the samples of one step, each when the pacing releases it, with
         /clock first, then record those published at once; False if stopped or reset before the
-        last."""
+        last. The publishers' handles are held for the whole step (``recorded.raw_sender``)."""
         first = step.samples[0]
         t = step.t
         stamps_ns = base_ns + np.round(t * 1e9).astype(np.int64)
         rows = self._messages.encode(step.world, stamps_ns, first.step, first.stance_side)
         publishers = [self.sampled[topic] for topic in rows]
-        outputs = [(publisher.send, [row.tobytes() for row in encoded])
-                   for publisher, encoded in zip(publishers, rows.values())]
+        payloads = [[row.tobytes() for row in encoded] for encoded in rows.values()]
         clock = [row.tobytes() for row in self.clock.encode(stamps_ns)]
         controls, stop, live, paced = self.controls, self._stop, self.live, pacer.factor > 0
         if not self.context.ok():  # shut down under us: a stop (the stop flag says so at each sample)
@@ -467,25 +469,29 @@ class SimulatorNode(Node):
                                               stamps_ns[recorded:published]))
 
         try:
-            for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
-                if controls.paused:
-                    held = time.monotonic()
-                    controls.hold(stop)
-                    pacer.delay(time.monotonic() - held)
-                if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
-                    return False
-                self.clock.publish(clock[k])
-                if k == 0:
-                    self.phases.sample(first.step, first.stance_side, first.t, base_ns)
-                for send, data in outputs:
-                    send(data[k], stamp)
-                if live is not None:
-                    live.time(stamp)
-                controls.iterations += 1
-                published = k + 1
-                if recorder is not None and published - recorded == RECORD_EVERY:
-                    record()
-                    recorded = published
+            with ExitStack() as handles:
+                outputs = [(handles.enter_context(publisher.sending()), data)
+                           for publisher, data in zip(publishers, payloads)]
+                publish_clock = handles.enter_context(raw_sender(self.clock.publisher))
+                for k, (due, stamp) in enumerate(zip((offset + t).tolist(), stamps_ns.tolist())):
+                    if controls.paused:
+                        held = time.monotonic()
+                        controls.hold(stop)
+                        pacer.delay(time.monotonic() - held)
+                    if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
+                        return False
+                    publish_clock(clock[k])
+                    if k == 0:
+                        self.phases.sample(first.step, first.stance_side, first.t, base_ns)
+                    for send, data in outputs:
+                        send(data[k], stamp)
+                    if live is not None:
+                        live.time(stamp)
+                    controls.iterations += 1
+                    published = k + 1
+                    if recorder is not None and published - recorded == RECORD_EVERY:
+                        record()
+                        recorded = published
         finally:
             if recorder is not None and published > recorded:
                 record()

@@ -18,7 +18,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -158,8 +158,7 @@ def build_atlas(params: BipedParams, mode: GaitMode, executor: Executor, grid: G
             atlas.nodes[name][:, :, slab.k] = array
         if on_slab is not None:
             on_slab(grid.shape[0] * grid.shape[1])
-    return Atlas(atlas.params, atlas.mode, atlas.fingerprint, atlas.friction, grid, atlas.nodes,
-                 time.perf_counter() - start_time)
+    return replace(atlas, build_seconds=time.perf_counter() - start_time)
 
 
 def _completed(futures) -> Iterator[Slab]:

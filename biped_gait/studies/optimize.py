@@ -15,7 +15,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from ..core.gait.configurations import GaitMode
 from .executors import planner_for
@@ -160,6 +159,7 @@ def _refine(
     """Bounded scalar minimization of W over alpha inside ``bracket`` (rad), each solve
     warm-started from the nearest gait solved so far; every gait solved is added to ``solved``
     and shown to ``on_result``."""
+    from scipy.optimize import minimize_scalar  # here, not with the module: it takes a plan process's time to import
 
     def effort(alpha: float) -> float:
         nearest = min(solved, key=lambda a: abs(a - alpha))

@@ -26,11 +26,9 @@ from collections.abc import Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-from tqdm import tqdm
 
 from ..core.dynamics.hybrid import HybridStep
 from ..core.model.params import BipedParams
@@ -39,6 +37,9 @@ from ..core.walking.push import DIRECTIONS, Push, horizontal_impulse
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.walking.walk import PlannedOrbit, Walker
 from .executors import planner_for
+
+if TYPE_CHECKING:  # matplotlib and tqdm are imported where they are used: the CLI reads this module's defaults
+    from matplotlib.figure import Figure
 
 RECOVERY_STEPS = 10
 RECOVERY_TOLERANCE = 1e-3  # rad, rad/s
@@ -146,6 +147,8 @@ def run_push_study(executor: Executor, params: BipedParams, step_length: float, 
                    steering: float | None = DEFAULT_RATE) -> list[PushLimit]:
     """``largest_push`` for each (alpha rad, direction name) of ``cases``, all at once on
     ``executor``, with a progress bar on stderr; in the order of ``cases``."""
+    from tqdm import tqdm
+
     futures = {executor.submit(push_task, params, step_length, period, alpha, mode, direction, phase, steering): k
                for k, (alpha, direction) in enumerate(cases)}
     results: list[PushLimit | None] = [None] * len(cases)
@@ -191,6 +194,9 @@ def write_results(limits: Sequence[PushLimit], out: Path) -> list[Path]:
 
 
 def _figure(polar: bool = False) -> tuple[Figure, object]:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(6.4, 5.2), layout="constrained")
     FigureCanvasAgg(fig)
     return fig, fig.add_subplot(projection="polar" if polar else None)

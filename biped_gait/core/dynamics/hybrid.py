@@ -27,7 +27,6 @@ through this module.
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..model.biped import BipedModel
 from ..model.exchange import KinematicExchange, LinearExchange, leg_exchange
@@ -79,7 +78,7 @@ class TouchdownGuard:
             return self._crossing(nodes, h_start, t[-1])
         if not rate_start < 0.0 <= rate_end:  # no minimum of w inside the step
             return None
-        t_min = brentq(lambda s: self.motion(nodes, s)[1], t[0], t[-1], xtol=1e-14, rtol=1e-14)
+        t_min = _root(lambda s: self.motion(nodes, s)[1], t[0], t[-1])
         h_min = self.motion(nodes, t_min)[0]
         if h_min <= 0.0:
             return self._crossing(nodes, h_start, t_min)
@@ -90,7 +89,16 @@ class TouchdownGuard:
         ``t_below`` (s), where w <= 0."""
         if h_start <= 0.0:  # already touching at the start of this integration step
             return float(nodes[0][0])
-        return brentq(lambda s: self.motion(nodes, s)[0], nodes[0][0], t_below, xtol=1e-14, rtol=1e-14)
+        return _root(lambda s: self.motion(nodes, s)[0], nodes[0][0], t_below)
+
+
+def _root(f, a: float, b: float) -> float:
+    """The root of ``f`` between ``a`` and ``b`` (s) to 1e-14, by SciPy's Brent method, imported
+    here: the walker needs it (``walk`` loads it with itself), a plan never does, and importing
+    ``scipy.optimize`` takes a plan process's time (tenths of a second)."""
+    from scipy.optimize import brentq
+
+    return brentq(f, a, b, xtol=1e-14, rtol=1e-14)
 
 
 def locked_rotation(bm: BipedModel, q_t: np.ndarray) -> np.ndarray:

@@ -39,8 +39,6 @@ from dataclasses import dataclass, replace
 
 import highspy
 import numpy as np
-import osqp
-from scipy import sparse
 
 from ..model.biped import BipedModel
 
@@ -513,6 +511,9 @@ def duality_gap(lp: _L1Program, objective: float, y_eq: np.ndarray, y_ub: np.nda
 
 def solve_l2(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -> ImpulseSolution:
     """Minimize sum (reading I)_i^2 (N^2 m^2 s^2) under the same constraints, by OSQP (polished)."""
+    import osqp  # here: only this effort needs OSQP and SciPy's sparse matrices (a tenth of a second to import)
+    from scipy import sparse
+
     equations = problem.equations()
     lay = problem.layout
     n_x = lay.unknowns

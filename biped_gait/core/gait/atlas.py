@@ -7,8 +7,10 @@ warm start of a solve nearby), its status (admissible; inadmissible on the branc
 conditions that limit it; only the backward-knee twin converges; nothing converges), and the
 figures the studies and maps use: W (N m s), min vertical ground reaction (N), min swing
 height (m), max friction ratio, min swing-knee angle q9 (rad), yaw angular momenta at T- and T+
-(kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``:
-a stale or unreadable file is refused with a one-line message that says how to rebuild it.
+(kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``
+(and recognized at once by ``fingerprint.source_fingerprint`` when the code is byte for byte the
+one it was built with): a stale or unreadable file is refused with a one-line message that says how
+to rebuild it.
 
 Files are compressed NumPy archives (``.npz``, no pickles). The shipped atlases are package data
 (``biped_gait/core/data/atlas/``); atlases of a user's parameter file go to the cache
@@ -21,6 +23,7 @@ import json
 import math
 import os
 import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import IntEnum
 from importlib import resources
@@ -31,7 +34,7 @@ import numpy as np
 from .admissibility import Limit, describe
 from .configurations import GaitMode
 from .continuation import SPACING
-from .fingerprint import ATLAS_FORMAT, model_fingerprint
+from .fingerprint import ATLAS_FORMAT, model_fingerprint, source_fingerprint
 from ..model.params import BipedParams, load_params, shipped_param_names
 
 STEP_LENGTHS = np.round(np.arange(0.25, 0.65 + 1e-9, 0.025), 6)  # m
@@ -117,7 +120,8 @@ class Grid:
 @dataclass(frozen=True)
 class Atlas:
     """The gaits of one parameter set (``params``, its name; ``friction`` its coefficient) and
-    ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array."""
+    ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array;
+    ``fingerprint`` and ``source`` are the model and source fingerprints it was built with."""
 
     params: str
     mode: GaitMode
@@ -126,6 +130,7 @@ class Atlas:
     grid: Grid
     nodes: dict[str, np.ndarray]
     build_seconds: float = math.nan
+    source: str = ""
 
     @classmethod
     def empty(cls, params: BipedParams, mode: GaitMode, grid: Grid | None = None) -> "Atlas":
@@ -136,7 +141,8 @@ class Atlas:
         for name, (_, dtype) in NODE_ARRAYS.items():
             fill = NodeStatus.NO_CONVERGENCE if name == "status" else (Limit.NO_CONVERGENCE if name == "limits" else np.nan)
             nodes[name] = np.full(grid.shape + node_tail(name, params), fill, dtype=dtype)
-        return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes)
+        return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes,
+                   source=source_fingerprint(params))
 
     # Queries ----------------------------------------------------------------------------------
     def status(self, index: tuple[int, int, int]) -> NodeStatus:
@@ -219,7 +225,7 @@ class Atlas:
     def save(self, path: Path) -> Path:
         """Write the atlas as a compressed ``.npz`` (atomically: a temporary file, then renamed)."""
         meta = {"format": ATLAS_FORMAT, "params": self.params, "mode": self.mode.value, "fingerprint": self.fingerprint,
-                "friction": self.friction, "build_seconds": self.build_seconds}
+                "friction": self.friction, "build_seconds": self.build_seconds, "source": self.source}
         return write_archive(path, meta, {"step_lengths": self.grid.step_lengths, "periods": self.grid.periods,
                                           "alphas": self.grid.alphas, **self.nodes})
 
@@ -227,14 +233,16 @@ class Atlas:
     def load(cls, path: Path, params: BipedParams, source: str | None = None) -> "Atlas":
         """Read an atlas for ``params`` (``source``: the name or file the user gave); ``AtlasError``
         with the rebuild command if the file is unreadable, of another mode format, or stale."""
-        meta, data = read_archive(path, "gait atlas", rebuild_command(params.name, source), model_fingerprint(params),
-                                  ("step_lengths", "periods", "alphas", *NODE_ARRAYS))
+        rebuild = rebuild_command(params.name, source)
+        meta, data = read_archive(path, "gait atlas", rebuild, lambda meta: (
+            meta.get("source") == source_fingerprint(params) or meta.get("fingerprint") == model_fingerprint(params)),
+            ("step_lengths", "periods", "alphas", *NODE_ARRAYS))
         grid = Grid(data["step_lengths"], data["periods"], data["alphas"])
         nodes = {name: data[name] for name in NODE_ARRAYS}
-        check_shapes(path, "gait atlas", rebuild_command(params.name, source),
-                     {name: grid.shape + node_tail(name, params) for name in NODE_ARRAYS}, nodes)
+        check_shapes(path, "gait atlas", rebuild, {name: grid.shape + node_tail(name, params) for name in NODE_ARRAYS},
+                     nodes)
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
-                   float(meta.get("build_seconds", math.nan)))
+                   float(meta.get("build_seconds", math.nan)), meta.get("source", ""))
 
 
 def write_archive(path: Path, meta: dict, arrays: dict[str, np.ndarray]) -> Path:
@@ -249,15 +257,15 @@ def write_archive(path: Path, meta: dict, arrays: dict[str, np.ndarray]) -> Path
     return path
 
 
-def read_archive(path: Path, what: str, rebuild: str, fingerprint: str,
+def read_archive(path: Path, what: str, rebuild: str, current: Callable[[dict], bool],
                  names: tuple[str, ...]) -> tuple[dict, dict[str, np.ndarray]]:
     """The JSON meta and the arrays ``names`` of the archive of ``what`` (e.g. "gait atlas") at
     ``path``; ``AtlasError`` (one line, with the ``rebuild`` command) if it is missing,
-    unreadable, of another format or not of ``fingerprint``."""
+    unreadable, of another format or not ``current`` (its meta tells: the fingerprints)."""
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            if meta.get("format") != ATLAS_FORMAT or meta.get("fingerprint") != fingerprint:
+            if meta.get("format") != ATLAS_FORMAT or not current(meta):
                 raise AtlasError(f"the {what} {path} is stale (built for other parameters or model code): "
                                  f"rebuild it with `{rebuild}`")
             return meta, {name: data[name] for name in names}

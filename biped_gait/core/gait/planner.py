@@ -156,7 +156,8 @@ def validate_step_width(step_width: float | None, params: BipedParams) -> float:
 
 
 class GaitPlanner:
-    """Plans gaits for one parameter set; keeps its Pinocchio models and hybrid step.
+    """Plans gaits for one parameter set; keeps its Pinocchio models, hybrid step and flows, and
+    its atlases (loaded when it is made, so that its first plan costs what the next ones do).
 
     Not thread-safe (Pinocchio data are reused): give each thread or process its own planner.
     """
@@ -165,8 +166,9 @@ class GaitPlanner:
                  on_note: Callable[[str], None] | None = None):
         """``params``: a parameter set, its name or file (None: the default); ``settings``: the
         numerical settings (grids, tolerance, iterations, samples); ``atlas``: use the gait
-        atlas of these parameters (shipped, or in the cache) when there is a current one;
-        ``on_note``: told (once per mode) why there is none (default: a Python warning)."""
+        atlas of these parameters (shipped, or in the cache) when there is a current one, loaded
+        here for every mode; ``on_note``: told (once per mode) why there is none (default: a
+        Python warning)."""
         self.settings = settings
         self.source = params if isinstance(params, str) else None
         self.params = params if isinstance(params, BipedParams) else load_params(params)
@@ -174,24 +176,32 @@ class GaitPlanner:
         self._atlases: dict[GaitMode, Atlas | None] = {}
         self._turning_atlases: dict[GaitMode, TurningAtlas | None] = {}
         self.atlas_notes: dict[GaitMode, str] = {}
+        self._told: set[GaitMode] = set()
         self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
         self.hybrid = HybridStep(self.model)
         self.flow = self.hybrid.flow(settings.fine_steps)
         self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
+        for mode in GaitMode:
+            self._atlases[mode] = self._load_atlas(mode)
+
+    def _load_atlas(self, mode: GaitMode) -> Atlas | None:
+        """The current atlas of these parameters and ``mode``, or None (why: ``atlas_notes[mode]``)."""
+        if not self.use_atlas:
+            return None
+        try:
+            return Atlas.load(atlas_path(self.params, mode), self.params, self.source)
+        except AtlasError as exc:
+            self.atlas_notes[mode] = str(exc)
+            return None
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
-        """The current atlas of these parameters and ``mode`` (loaded once), or None; why not
-        is in ``atlas_notes[mode]`` (and said once as a warning)."""
-        if mode not in self._atlases:
-            atlas = None
-            if self.use_atlas:
-                try:
-                    atlas = Atlas.load(atlas_path(self.params, mode), self.params, self.source)
-                except AtlasError as exc:
-                    self.atlas_notes[mode] = str(exc)
-                    self._note(f"{exc}; planning without it ({mode.value} gaits)")
-            self._atlases[mode] = atlas
+        """The current atlas of these parameters and ``mode`` (loaded when the planner is made),
+        or None; why not is in ``atlas_notes[mode]``, said once as a note when the mode is first
+        asked for."""
+        if mode in self.atlas_notes and mode not in self._told:
+            self._told.add(mode)
+            self._note(f"{self.atlas_notes[mode]}; planning without it ({mode.value} gaits)")
         return self._atlases[mode]
 
     def plan(self, request: GaitRequest, guess: tuple[np.ndarray, float] | None = None, cold: bool = False) -> Gait:

@@ -157,7 +157,8 @@ class TurningAtlas:
         """Read the turning atlas of ``params``; ``AtlasError`` (one line, with the rebuild
         command) if it is missing, unreadable or stale."""
         rebuild = rebuild_command(params.name, source) + " --turning"
-        meta, data = read_archive(path, "turning atlas", rebuild, turning_fingerprint(params),
+        meta, data = read_archive(path, "turning atlas", rebuild,
+                                  lambda meta: meta.get("fingerprint") == turning_fingerprint(params),
                                   ("step_lengths", "periods", "alphas", "curvatures", *NODE_ARRAYS))
         grid = TurningGrid(data["step_lengths"], data["periods"], data["alphas"], data["curvatures"])
         nodes = {name: data[name] for name in NODE_ARRAYS}

@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from importlib import resources
 from pathlib import Path
 
 from .joints import JointTable, joint_table
 from .text import clip
-from .yaml_files import parse_yaml, read_yaml_text
+from .yaml_files import parse_package_yaml, parse_yaml, read_yaml_text
 
 DEFAULT_PARAMS = "aoustin2013"
 DEFAULT_FRICTION = 0.5  # Coulomb coefficient of the foot on the floor when a file gives none
@@ -88,16 +89,19 @@ def load_params(name_or_path: str | Path | None = None) -> BipedParams:
     """
     key = DEFAULT_PARAMS if name_or_path in (None, "") else str(name_or_path)
     if key in shipped_param_names():
-        text = resources.files("biped_gait.core.data").joinpath(f"{key}.yaml").read_text()
-        source = key
-    elif _is_file(key):
-        text = read_yaml_text(key, "parameter file")
-        source = key
-    else:
-        raise ValueError(
-            f"unknown parameter set {clip(repr(key))}: give one of {', '.join(shipped_param_names())} or a YAML file path"
-        )
-    return params_from_dict(parse_yaml(text, f"parameter file {source}"), source)
+        return _shipped_params(key)
+    if _is_file(key):
+        return params_from_dict(parse_yaml(read_yaml_text(key, "parameter file"), f"parameter file {key}"), key)
+    raise ValueError(
+        f"unknown parameter set {clip(repr(key))}: give one of {', '.join(shipped_param_names())} or a YAML file path"
+    )
+
+
+@lru_cache(maxsize=None)
+def _shipped_params(name: str) -> BipedParams:
+    """A shipped parameter set, read once per process (package data; ``BipedParams`` is immutable)."""
+    text = resources.files("biped_gait.core.data").joinpath(f"{name}.yaml").read_text()
+    return params_from_dict(parse_package_yaml(text), name)
 
 
 def _is_file(key: str) -> bool:

@@ -215,6 +215,14 @@ def as_cycle(orbit: "PlannedOrbit | Cycle") -> Cycle:
     return (orbit,) if isinstance(orbit, PlannedOrbit) else tuple(orbit)
 
 
+def prepare_walking() -> None:
+    """Load what walking needs once and a plan does not: SciPy's root finder, which the touchdown
+    guard imports on first use (``hybrid._root``; a few tenths of a second). Called when a
+    ``Walker`` is made, and by a process that walks at start-up (the simulator node), so that
+    its first walk starts at once."""
+    import scipy.optimize  # noqa: F401
+
+
 class Walker:
     """Walks the gait of ``orbit`` (one periodic step, or the steps of a stride, ``Cycle``) with
     the dynamics of ``hybrid`` one step per ``walk_step``."""
@@ -230,6 +238,7 @@ class Walker:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if momentum_rate is not None and not reaim:
             raise ValueError("steering the momentum is part of the re-aim: it needs reaim")
+        prepare_walking()
         self.hybrid, self.bm, self.rate = hybrid, hybrid.bm, rate
         self.settings = settings
         self.grid = settings.walk_steps

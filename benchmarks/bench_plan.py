@@ -1,0 +1,75 @@
+"""Benchmark: the first plan of a process against the next ones, beside the straightforward cold
+solve (``yardsticks.ColdSolve``) measured in the same run.
+
+Each of ``--processes`` fresh Python processes makes a ``GaitPlanner`` (default parameters, its
+atlases) and plans ``--plans`` gaits from the atlas, each a new request of one family (L = T =
+0.45, alpha 15 to 30 deg, normal mode), then the first request again; the first plan's time is
+set beside the same request's second plan and the median of the others. The processes alternate with cold solves of the yardstick, so that a change of load falls
+on both. Run:
+
+    .venv/bin/python benchmarks/bench_plan.py [--processes N] [--plans N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import subprocess
+import sys
+import time
+
+from yardsticks import ColdSolve, median_s
+
+
+def child(plans: int) -> None:
+    """In a fresh process: the planner's making, its plans (the first request last again) (s), as JSON."""
+    from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+
+    start = time.perf_counter()
+    planner = GaitPlanner()
+    made = time.perf_counter()
+    times, found = [], set()
+    alphas = [math.radians(15.0 + 15.0 * k / max(1, plans - 1)) for k in range(plans)]
+    for alpha in alphas + alphas[:1]:
+        begin = time.perf_counter()
+        gait = planner.plan(GaitRequest(0.45, 0.45, alpha, "normal"))
+        times.append(time.perf_counter() - begin)
+        found.add(gait.found)
+    print(json.dumps({"make": made - start, "plans": times, "found": sorted(found)}))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--processes", type=int, default=7)
+    parser.add_argument("--plans", type=int, default=8)
+    args = parser.parse_args()
+    cold = ColdSolve()
+    cold.solve()
+    runs, colds = [], []
+    for _ in range(args.processes):
+        out = subprocess.run([sys.executable, __file__, "--child", str(args.plans)], check=True, capture_output=True,
+                             text=True).stdout
+        runs.append(json.loads(out))
+        colds.append(median_s(cold.solve, 1))
+    first = statistics.median(run["plans"][0] for run in runs)
+    again = statistics.median(run["plans"][-1] for run in runs)
+    warm = statistics.median(t for run in runs for t in run["plans"][1:-1])
+    yardstick = statistics.median(colds)
+    found = sorted({f for run in runs for f in run["found"]})
+    print(f"plan from the atlas, L = T = 0.45, alpha 15..30 deg (normal), {args.processes} fresh processes of "
+          f"{args.plans} plans each (found by {', '.join(found)}); medians:")
+    print(f"  straightforward cold solve (yardstick): {1e3 * yardstick:7.1f} ms")
+    print(f"  first plan of a process: {1e3 * first:7.2f} ms   the same request again: {1e3 * again:7.2f} ms   "
+          f"first / again = {first / again:.2f}")
+    print(f"  the other plans: {1e3 * warm:7.2f} ms   first / other = {first / warm:.2f}")
+    print(f"  cold solve / first plan = {yardstick / first:.1f}   cold solve / next plan = {yardstick / warm:.1f}")
+    print(f"  (before the first plan: making the planner with its atlases {1e3 * statistics.median(r['make'] for r in runs):.1f} ms)")
+
+
+if __name__ == "__main__":
+    if sys.argv[1:2] == ["--child"]:
+        child(int(sys.argv[2]))
+    else:
+        main()
