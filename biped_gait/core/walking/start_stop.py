@@ -258,7 +258,7 @@ def plan_stop(hybrid: HybridStep, orbit: PlannedOrbit, grid: int) -> StopPlan:
     n = hybrid.bm.nq
     pose = Pose(float(x[n + 1]), theta)
     step = _judged(hybrid, orbit, leg.flow, q_t, x[:n], float(x[n]), pose_configuration(hybrid, orbit, pose),
-                   "the stop step")
+                   f"the stop step to L_s = {pose.step_length:.3f} m")
     double_support(hybrid, orbit, q_t, np.asarray(orbit.qd_b), step.qd_a, "the double support into the stop step")
     rest = double_support(hybrid, orbit, step.q_to, step.qd_b, None, "the stop's double support to rest")
     return StopPlan(pose, step, rest)
@@ -284,7 +284,8 @@ def plan_start(hybrid: HybridStep, orbit: PlannedOrbit, grid: int) -> StartPlan:
     n = hybrid.bm.nq
     pose = Pose(length, float(x[n + 1]))
     q_pose = pose_configuration(hybrid, orbit, pose)
-    step = _judged(hybrid, orbit, leg.flow, q_pose, x[:n], float(x[n]), q_t, "the start step")
+    step = _judged(hybrid, orbit, leg.flow, q_pose, x[:n], float(x[n]), q_t,
+                   f"the start step from theta_s = {math.degrees(pose.theta):.1f} deg")
     launch = double_support(hybrid, orbit, q_pose, np.zeros(n), step.qd_a, "the start's double support from rest")
     double_support(hybrid, orbit, q_t, step.qd_b, np.asarray(orbit.qd_a), "the double support onto the gait")
     return StartPlan(pose, launch, step)
@@ -342,3 +343,17 @@ def double_support(hybrid: HybridStep, orbit: PlannedOrbit, q: np.ndarray, qd_b:
     after = impact.forward(qd_b, sol.i_minus, sol.i_plus)
     return DoubleSupport(np.asarray(q), np.asarray(qd_b), np.zeros(n) if qd_a is None else np.asarray(qd_a), sol,
                          friction_ratios(sol), after)
+
+
+def why_not(kind: str, hybrid: HybridStep, orbit: PlannedOrbit, grid: int) -> str:
+    """Why a walk of ``orbit`` cannot start from rest (``kind`` 'start') or stop at rest ('stop'):
+    the refusal of ``plan_start`` / ``plan_stop``; or, where one is found, that the walker does
+    not walk start and stop steps (none is found for the shipped parameter sets: docs/model.md
+    section 8.10)."""
+    plan = {"start": plan_start, "stop": plan_stop}[kind]
+    try:
+        found = plan(hybrid, orbit, grid)
+    except StartStopError as exc:
+        return str(exc)
+    return (f"a {kind} step was found (T = {found.step.duration:.3f} s, pose L = {found.pose.step_length:.3f} m, "
+            f"theta = {math.degrees(found.pose.theta):.1f} deg), but the walker does not walk {kind} steps")
