@@ -20,6 +20,12 @@ the same bytes as were published, and so does the optional Foxglove live view
 are serialized at once (``walk_messages``). Controls: ``~/pause``, ``~/resume``, ``~/reset`` and
 the step counter ``~/iterations`` (``sim_controls``).
 
+Starting and stopping: with ``start_from_rest`` the walk would begin standing, through a start
+step planned by the core (``start_stop``); ``/cmd_vel`` linear.x 0 asks it to stop. The core
+refuses both for the shipped parameter sets with the physical reason (docs/model.md section
+8.10), which the node logs: the walk then does not start (exit status 1), or walks on at the
+slowest gait.
+
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Speed and turn:
 ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in rad/s), walked
@@ -68,6 +74,7 @@ from ..core.walking.pacing import Pacer
 from ..core.model.params import load_params, shipped_param_names
 from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
+from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
@@ -118,6 +125,9 @@ PARAMETERS = (
           choices=("momentum", "duration")),
     Param("momentum_rate", DEFAULT_RATE, "with recovery 'momentum': the momentum error's contraction per step "
           "(0: dead-beat)", 0.0, 0.99),
+    Param("start_from_rest", False, "start the walk from standing at rest (both feet down) through a start step "
+          "of its own (true/false; the core plans it and refuses it with the physical reason: docs/model.md "
+          "section 8.10); false: the walk starts on the gait's orbit"),
     Param("pushes", "", f"scripted pushes on the trunk: {SCRIPT_FORMAT} (step index, phase as a fraction of T in "
           "[0, 1), impulse in N s, world axes); also the ~/push service"),
     Param("speed_rule", SPEED_RULES[0], "how /cmd_vel speeds pick gaits: 'least_effort' (least W per metre among "
@@ -409,6 +419,10 @@ class SimulatorNode(Node):
             self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
         if walk.model is not None:
             self._actuated = walk.model.actuated_names
+        if walk.walker is not None and self.value["start_from_rest"]:
+            self._not_started("cannot start from rest: " + why_not("start", walk.walker.hybrid, walk.walker.orbit,
+                                                                    walk.walker.grid))
+            return True
         if walk.walker is not None:
             self.speed.start(walk.walker, orbit[0].params or None)
             self.pushes.start()
