@@ -1,6 +1,7 @@
 """The 9-DOF parameter sets give today's figures to the bit: plans, a walk, a sweep and the
 shipped atlases' nodes against the references stored before the model became a joint table
-(tests/reference_figures.py says what is stored and how to regenerate it)."""
+(tests/reference_figures.py says what is stored and how to regenerate it). Figures added since
+(plan keys, sweep columns) come after the stored ones, which are compared to the bit."""
 
 from __future__ import annotations
 
@@ -19,8 +20,9 @@ pytestmark = pytest.mark.core
 def test_plans_are_unchanged(params):
     for k, text in enumerate(ref.plan_texts(params)):
         stored = gzip.decompress((ref.DATA / f"plan-{params}-{k}.json.gz").read_bytes()).decode()
-        if text != stored:
-            now, before = json.loads(text), json.loads(stored)
+        now, before = json.loads(text), json.loads(stored)
+        assert list(now)[:len(before)] == list(before), "keys were added before the stored ones"
+        if json.dumps({key: now[key] for key in before}, indent=1) != stored:
             changed = [key for key in before if now.get(key) != before[key]]
             pytest.fail(f"plan {k} of {params} ({ref.REQUESTS[k][:4]}) changed in {changed}")
 
@@ -34,7 +36,10 @@ def test_walk_is_unchanged():
 
 
 def test_sweep_is_unchanged():
-    assert ref.sweep_csv() == (ref.DATA / "sweep.csv").read_text()
+    stored = (ref.DATA / "sweep.csv").read_text()
+    header = stored.splitlines()[0].split(",")
+    now = ref.sweep_csv(header)
+    assert now == stored
 
 
 def test_atlas_nodes_are_unchanged():

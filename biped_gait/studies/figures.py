@@ -6,6 +6,8 @@
   of a sweep over periods).
 - ``momentum_figure``: the yaw angular momentum (kg m^2/s) about the vertical through the
   current stance foot over two successive steps, normal against anti-normal (Fig. 5).
+- ``plan_figure``: one planned step: its joint angles (deg), the ground reaction (N) with its
+  friction ratio against the coefficient, and the yaw angular momentum (kg m^2/s).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ..core.gait.configurations import GaitMode
+from ..core.model.biped import JOINT_NAMES
 from .optimize import ArmOptimum
 from ..core.gait.gait import Gait
 
@@ -127,19 +130,56 @@ def two_step_momentum(gait: Gait) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([t, t + gait.period]), np.concatenate([h, -h])
 
 
-def momentum_figure(normal: Gait, anti_normal: Gait) -> Figure:
-    """Fig. 5: yaw angular momentum about the stance foot over two steps, both arm modes."""
+def momentum_figure(optimum: Gait, other: Gait) -> Figure:
+    """Fig. 5: yaw angular momentum about the stance foot over two steps, both arm modes (the
+    optimal gait of one, the other at its alpha)."""
     fig, ax = _new_figure()
-    for gait in (normal, anti_normal):
+    for gait in (optimum, other):
         t, h = two_step_momentum(gait)
         ax.plot(t, h, LINE_STYLES[gait.mode], label=f"{gait.mode}, alpha = {math.degrees(gait.arm_amplitude):.1f} deg")
-    ax.axvline(normal.period, color="grey", linewidth=0.8)
+    ax.axvline(optimum.period, color="grey", linewidth=0.8)
     ax.axhline(0.0, color="grey", linewidth=0.5)
     ax.set_xlabel("time t (s)  (double support at t = T)")
     ax.set_ylabel("yaw angular momentum about the stance foot (kg m^2/s)")
-    ax.set_title(f"Two steps, L = {normal.step_length:g} m, T = {normal.period:g} s, params {normal.params}")
+    ax.set_title(f"Two steps, L = {optimum.step_length:g} m, T = {optimum.period:g} s, params {optimum.params}")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
+    return fig
+
+
+def plan_figure(gait: Gait) -> Figure:
+    """The ballistic step of a planned gait over t in [0, T]: the joint angles (deg), the
+    vertical ground reaction (N) and the friction ratio |F_xy| / F_z against the coefficient,
+    the yaw angular momentum about the stance foot (kg m^2/s)."""
+    fig = Figure(figsize=(11.0, 4.2), layout="constrained")
+    FigureCanvasAgg(fig)
+    angles, reaction, momentum = (fig.add_subplot(1, 3, k + 1) for k in range(3))
+    title = (f"L = {gait.step_length:g} m, T = {gait.period:g} s, alpha = {math.degrees(gait.arm_amplitude):.1f} deg, "
+             f"{gait.mode}, params {gait.params}: {'admissible' if gait.admissible else 'not admissible'}")
+    fig.suptitle(title, fontsize="medium")
+    if gait.figures is None or gait.figures.samples is None:
+        angles.text(0.5, 0.5, "no converged step", transform=angles.transAxes, ha="center")
+        return fig
+    t, q, grf = gait.figures.samples.t, gait.figures.samples.q, gait.figures.grf
+    for name, column in zip(JOINT_NAMES, q.T):
+        angles.plot(t, np.degrees(column), label=name.replace("_", " "))
+    angles.set_ylabel("joint angle (deg)")
+    angles.legend(fontsize="x-small", ncols=2)
+    reaction.plot(t, grf[:, 2], color="C0")
+    reaction.set_ylabel("vertical ground reaction F_z (N)", color="C0")
+    ratio = reaction.twinx()
+    ratio.plot(t, np.hypot(grf[:, 0], grf[:, 1]) / grf[:, 2], color="C3")
+    mu = gait.problem.options.friction
+    if math.isfinite(mu):
+        ratio.axhline(mu, color="C3", linestyle=":", linewidth=1.0, label=f"mu = {mu:g}")
+        ratio.legend(fontsize="small", loc="lower right")
+    ratio.set_ylabel("friction ratio |F_xy| / F_z", color="C3")
+    momentum.plot(t, gait.figures.h_vertical, color="C2")
+    momentum.axhline(0.0, color="grey", linewidth=0.5)
+    momentum.set_ylabel("yaw angular momentum about the stance foot (kg m^2/s)")
+    for ax in (angles, reaction, momentum):
+        ax.set_xlabel("time in the step t (s)")
+        ax.grid(True, alpha=0.3)
     return fig
 
 

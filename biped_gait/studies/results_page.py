@@ -119,8 +119,8 @@ def paper_claims(study: Study) -> list[Claim]:
     alphas = [math.degrees(o.alpha) for o in optima]
     efforts = [o.W for o in optima]
     comparisons = list(study.comparisons.items())
-    premium = [(case, c.anti_normal.W - c.normal.W) for case, c in comparisons]
-    jumps = [(case, momentum_jump(c.normal.gait), momentum_jump(c.anti_normal)) for case, c in comparisons]
+    premium = [(case, c.other.W - c.optimum.W) for case, c in comparisons]
+    jumps = [(case, momentum_jump(c.optimum.gait), momentum_jump(c.other)) for case, c in comparisons]
     case = lambda c: f"L = {c[0]:g}, T = {c[1]:g}"  # noqa: E731
     return [
         Claim(
@@ -161,10 +161,10 @@ def _effort_table(study: Study) -> list[str]:
             ("-",) * 4
         )
         rows.append([
-            f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.normal.alpha):.2f}", alpha_p,
-            f"{c.normal.W:.3f}", normal_p, f"{c.anti_normal.W:.3f}", anti_p,
-            f"{c.anti_normal.W / c.normal.W:.3f}", ratio_p, f"{math.degrees(c.normal.gait.theta):.3f}",
-            c.normal.where,
+            f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.optimum.alpha):.2f}", alpha_p,
+            f"{c.optimum.W:.3f}", normal_p, f"{c.other.W:.3f}", anti_p,
+            f"{c.other.W / c.optimum.W:.3f}", ratio_p, f"{math.degrees(c.optimum.gait.theta):.3f}",
+            c.optimum.where,
         ])
     return _table(header, rows)
 
@@ -174,8 +174,8 @@ def _momentum_table(study: Study) -> list[str]:
               "anti-normal", "jump, normal", "anti-normal"]
     rows = []
     for case, c in study.comparisons.items():
-        n, a = c.normal.gait, c.anti_normal
-        rows.append([f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.normal.alpha):.2f}",
+        n, a = c.optimum.gait, c.other
+        rows.append([f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.optimum.alpha):.2f}",
                      f"{n.double_support.h_t_minus[0]:.3f}", f"{a.double_support.h_t_minus[0]:.3f}", f"{n.double_support.h_t_plus[1]:.3f}", f"{a.double_support.h_t_plus[1]:.3f}",
                      f"{momentum_jump(n):.3f}", f"{momentum_jump(a):.3f}"])
     return _table(header, rows)
@@ -201,7 +201,7 @@ def _claims_section(studies: Sequence[Study]) -> list[str]:
         lines += ["", f"Parameter set `{study.params.name}`:", ""]
         for claim in paper_claims(study):
             lines.append(f"- **{'holds' if claim.holds else 'does not hold'}**: {claim.text} ({claim.evidence}).")
-        if all(c.normal.alpha == 0 for c in study.comparisons.values()):
+        if all(c.optimum.alpha == 0 for c in study.comparisons.values()):
             lines.append("- Here the least W is at alpha = 0 in every case: the arms do not swing, so the normal "
                          "and anti-normal gaits are the same gait.")
     return lines
@@ -249,7 +249,7 @@ def _optimal_amplitude(optima: Sequence[ArmOptimum]) -> str:
 
 def _anti_normal_premium(study: Study) -> str:
     optima = study.fig4_optima()
-    ours = [study.comparisons[case].anti_normal.W / study.comparisons[case].normal.W - 1 for case in FIG4_CASES]
+    ours = [study.comparisons[case].other.W / study.comparisons[case].optimum.W - 1 for case in FIG4_CASES]
     paper = [PAPER_EFFORT[o.gait.step_length][2] / PAPER_EFFORT[o.gait.step_length][1] - 1 for o in optima]
     trend = "grows" if _grows(ours) else "does not grow"
     return (
@@ -309,7 +309,7 @@ def _other_periods(default: Study, reference: Reference) -> str:
     else:
         outcome = f"finds an admissible gait (W = {cold.W:.3f} N m s)"
     continued = [c for case, c in default.comparisons.items() if case[1] == cold.period]
-    admissible = all(c.normal.gait.usable and c.anti_normal.usable for c in continued)
+    admissible = all(c.optimum.gait.usable and c.other.usable for c in continued)
     return (
         f"- **Periods other than {PAPER_PERIOD:g} s** (the paper gives no numbers for them): the planner finds "
         "each alpha sweep's first gait on the human-like branch from the gait atlas (built by continuation from "
@@ -477,7 +477,7 @@ def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMa
     """The sections beyond the paper, for the default parameter set, computed on ``executor``
     (optima bracketed every ``coarse_step`` rad, the walk's alphas every ``walk_alpha_step``)."""
     params = default.params
-    points = [executor.submit(point_stability, params, *case, comparison.normal.alpha, mode)
+    points = [executor.submit(point_stability, params, *case, comparison.optimum.alpha, mode)
               for case, comparison in default.comparisons.items() if case in FIG4_CASES
               for mode in (GaitMode.NORMAL, GaitMode.ANTI_NORMAL)]
     readings = effort_readings(params, executor, coarse_step)

@@ -133,7 +133,7 @@ def compute_walking(executor: Executor, study: Study, alpha_step: float = ALPHA_
     closed loops and pushes every ``alpha_step`` (rad) over [0, 45] deg (the pushes: about 5 s
     of CPU time each direction and alpha; the section's cost)."""
     params = study.params
-    alpha_opt = study.comparisons[FIG5_CASE].normal.alpha
+    alpha_opt = study.comparisons[FIG5_CASE].optimum.alpha
     length, period = FIG5_CASE
     alphas = inclusive_range(0.0, math.radians(45.0), alpha_step, "arm amplitude")
     loops = [executor.submit(closed_loop_radius, params, L, period, a, s)

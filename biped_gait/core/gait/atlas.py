@@ -10,6 +10,10 @@ height (m), max friction ratio, min swing-knee angle q9 (rad), yaw angular momen
 (kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``:
 a stale or unreadable file is refused with a one-line message that says how to rebuild it.
 
+A request's margins are answered by filtering the nodes (``Atlas.within``), not by rebuilding:
+the swing clearance and the step's friction ratio are stored; the margins on the impulses (the
+friction margin on them, the joint-rate bound) are the impulse problem's, solved per request.
+
 Files are compressed NumPy archives (``.npz``, no pickles). The shipped atlases are package data
 (``biped_gait/core/data/atlas/``); atlases of a user's parameter file go to the cache
 (``$BIPED_GAIT_CACHE``, else ``$XDG_CACHE_HOME/biped_gait``, else ``~/.cache/biped_gait``).
@@ -21,7 +25,7 @@ import json
 import math
 import os
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from enum import IntEnum
 from importlib import resources
 from pathlib import Path
@@ -32,6 +36,7 @@ from .admissibility import Limit, describe
 from .configurations import GaitMode
 from .continuation import SPACING
 from .fingerprint import ATLAS_FORMAT, model_fingerprint
+from .margins import Margins
 from ..model.params import BipedParams, load_params, shipped_param_names
 
 STEP_LENGTHS = np.round(np.arange(0.25, 0.65 + 1e-9, 0.025), 6)  # m
@@ -116,7 +121,10 @@ class Grid:
 @dataclass(frozen=True)
 class Atlas:
     """The gaits of one parameter set (``params``, its name; ``friction`` its coefficient) and
-    ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array."""
+    ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array; ``margins``:
+    those it is seen through (``within``; none for an atlas as built); ``options``: the
+    ``GaitRequest`` fields it was built with beyond the point and mode (none for the planner's:
+    a study's atlas, written elsewhere, says here what it holds)."""
 
     params: str
     mode: GaitMode
@@ -125,6 +133,8 @@ class Atlas:
     grid: Grid
     nodes: dict[str, np.ndarray]
     build_seconds: float = math.nan
+    margins: Margins = Margins()
+    options: dict = field(default_factory=dict)
 
     @classmethod
     def empty(cls, params: BipedParams, mode: GaitMode, grid: Grid | None = None) -> "Atlas":
@@ -136,6 +146,18 @@ class Atlas:
             fill = NodeStatus.NO_CONVERGENCE if name == "status" else (Limit.NO_CONVERGENCE if name == "limits" else np.nan)
             nodes[name] = np.full(grid.shape + tail, fill, dtype=dtype)
         return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes)
+
+    def within(self, margins: Margins, friction: float | None = None) -> "Atlas":
+        """This atlas seen through ``margins`` (nodes filtered, not rebuilt): an admissible node
+        whose swing clearance is not above ``margins.clearance`` (m) or whose step friction ratio
+        exceeds ``friction`` (default: the atlas's) minus ``margins.friction`` is inadmissible
+        with no limit's condition (it meets the limits, not the margins)."""
+        mu = self.friction if friction is None else friction
+        n = self.nodes
+        missed = (n["status"] == NodeStatus.ADMISSIBLE) & ~(
+            (n["min_swing_height"] > margins.clearance) & (n["max_friction_ratio"] <= mu - margins.friction))
+        status = np.where(missed, np.uint8(NodeStatus.INADMISSIBLE), n["status"]).astype(n["status"].dtype)
+        return replace(self, nodes={**n, "status": status}, margins=margins)
 
     # Queries ----------------------------------------------------------------------------------
     def status(self, index: tuple[int, int, int]) -> NodeStatus:
@@ -201,14 +223,15 @@ class Atlas:
         k = int(np.argmin(np.abs(self.grid.alphas - alpha)))
         row = self.nodes["status"][i, :, k] == NodeStatus.ADMISSIBLE
         where = f"L = {self.grid.step_lengths[i]:.3f} m, alpha = {math.degrees(self.grid.alphas[k]):.0f} deg"
+        what = "within the margins" if self.margins else "admissible"
         if row.any():
             periods = self.grid.periods[row]
-            return f"nearest admissible (atlas grid): T in [{periods.min():.3f}, {periods.max():.3f}] s at {where}"
+            return f"nearest {what} (atlas grid): T in [{periods.min():.3f}, {periods.max():.3f}] s at {where}"
         index = self.nearest(point)
         if index is None:
-            return f"no admissible gait in the atlas of {self.params} ({self.mode.value})"
+            return f"no {what} gait in the atlas of {self.params} ({self.mode.value})"
         nl, nt, na = self.grid.point(index)
-        return f"nearest admissible (atlas grid): L = {nl:.3f} m, T = {nt:.3f} s, alpha = {math.degrees(na):.0f} deg"
+        return f"nearest {what} (atlas grid): L = {nl:.3f} m, T = {nt:.3f} s, alpha = {math.degrees(na):.0f} deg"
 
     def counts(self) -> dict[str, int]:
         """Nodes per status."""
@@ -221,6 +244,9 @@ class Atlas:
         path.parent.mkdir(parents=True, exist_ok=True)
         meta = {"format": ATLAS_FORMAT, "params": self.params, "mode": self.mode.value, "fingerprint": self.fingerprint,
                 "friction": self.friction, "build_seconds": self.build_seconds}
+        if self.options:
+            meta["options"] = {k: v if not isinstance(v, float) or math.isfinite(v) else str(v)
+                               for k, v in self.options.items()}
         tmp = path.with_name(path.name + ".tmp")
         with open(tmp, "wb") as f:
             np.savez_compressed(f, meta=np.array(json.dumps(meta)), step_lengths=self.grid.step_lengths,
@@ -251,7 +277,7 @@ class Atlas:
             if nodes[name].shape != grid.shape + tail:
                 raise AtlasError(f"the gait atlas {path} is unreadable: rebuild it with `{rebuild}`")
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
-                   float(meta.get("build_seconds", math.nan)))
+                   float(meta.get("build_seconds", math.nan)), options=meta.get("options", {}))
 
 
 def _weights(axis: np.ndarray, x: float, cubic: bool) -> tuple[np.ndarray, np.ndarray]:

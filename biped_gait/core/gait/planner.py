@@ -28,10 +28,11 @@ from .continuation import continue_to
 from ..dynamics.flow import hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem
 from ..dynamics.hybrid import HybridStep
-from ..dynamics.impulses import EFFORTS, EffortOptions, friction_ratios, solve_impulses
+from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, friction_ratios, solve_impulses
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params
 from .figures import StepFigures, energy_drift, step_figures
+from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .stability import open_loop
 
@@ -43,9 +44,11 @@ BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm s
 class GaitRequest:
     """What to plan: step length L (m), period T (s), arm amplitude alpha (rad), gait mode (a
     ``GaitMode`` or its name, parsed here), parameter set (name or file; empty: the planner's),
-    closure (``theta``/``slack``), effort (``l1``/``l2``); the impulses' friction coefficient
-    (None: the parameter set's; inf: no cone), the bound on the double support's joint rates
-    (rad/s; inf: none) and the effort's reading (``joint``/``absolute``)."""
+    closure (``theta``/``slack``), effort (``l1``/``l2``); the friction coefficient (NaN: the
+    parameter set's; inf: no cone), the bound on the double support's joint rates (rad/s; inf:
+    none), the effort's reading (``joint``/``absolute``), and the margins: the swing tip's least
+    clearance (m) and the friction margin (the impulses and the step within mu - it). The
+    options' names, units and defaults are those of ``biped_gait.gait_options``."""
 
     step_length: float
     period: float
@@ -54,9 +57,11 @@ class GaitRequest:
     params: str = ""
     closure: str = "theta"
     effort: str = "l1"
-    friction: float | None = None
+    friction: float = math.nan
     rate_bound: float = math.inf
     effort_coordinates: str = "joint"
+    min_clearance: float = 0.0
+    friction_margin: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "mode", GaitMode.parse(self.mode))
@@ -93,9 +98,20 @@ def validate_request(request: GaitRequest, params: BipedParams) -> GaitProblem:
         raise ValueError(f"unknown closure {request.closure!r}: use 'theta' or 'slack'")
     if request.effort not in EFFORTS:
         raise ValueError(f"unknown effort {request.effort!r}: use 'l1' or 'l2'")
-    friction = params.friction if request.friction is None else _number("friction coefficient", request.friction)
+    friction = _number("friction coefficient", request.friction)
+    friction = params.friction if math.isnan(friction) else friction
+    if friction == 0:
+        raise ValueError("friction coefficient 0 is a frictionless floor, on which no gait walks (NaN: the parameter "
+                         "set's coefficient; inf: no cone)")
     options = EffortOptions(friction, _number("joint-rate bound", request.rate_bound), request.effort_coordinates)
-    return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort, options)
+    clearance = _finite("swing clearance margin", request.min_clearance)
+    margin = _finite("friction margin", request.friction_margin)
+    if clearance < 0:
+        raise ValueError(f"swing clearance margin must be 0 (none) or positive, got {clearance:g} m")
+    if not 0 <= margin < friction:
+        raise ValueError(f"friction margin must be in [0, {friction:g}) (the friction coefficient), got {margin:g}")
+    return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort, options,
+                       Margins(clearance, margin))
 
 
 class GaitPlanner:
@@ -159,6 +175,8 @@ class GaitPlanner:
         """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold."""
         point = (problem.step_length, problem.period, problem.arm_amplitude)
         atlas = self.atlas(problem.mode)
+        if atlas is not None and problem.margins:
+            atlas = atlas.within(problem.margins, problem.options.friction)
         first = None
         guess = atlas.guess(point) if atlas is not None else None
         if guess is not None:
@@ -201,17 +219,23 @@ class GaitPlanner:
         step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                          problem.mode, problem.closure, guess, self.settings, self.coarse_flow)
         double_support = figures = None
+        within_limits = None
         if step.converged:
-            double_support = self._double_support(step, problem)
+            double_support, within_limits = self._double_support(step, problem)
             figures = self._figures(step, problem.period)
-        verdict = judge(step, double_support.impulses if double_support else None, figures, problem.options.friction)
+        impulses = double_support.impulses if double_support else None
+        verdict = with_margins(judge(step, impulses, figures, problem.options.friction), impulses, figures,
+                               problem.options.friction, problem.margins, within_limits)
         stability = None
         if double_support is not None and double_support.impulses.success:
             stability = open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
                                   double_support.impulses.i_minus, double_support.impulses.i_plus)
         return Gait(problem, step, double_support, figures, verdict, math.nan, found, stability=stability)
 
-    def _double_support(self, step: BvpSolution, problem: GaitProblem) -> DoubleSupport:
+    def _double_support(self, step: BvpSolution, problem: GaitProblem) -> tuple[DoubleSupport, ImpulseSolution | None]:
+        """The double support with the impulses under the request's margins, and, when those
+        have no solution but the margins narrow the impulse problem, the impulses under the
+        limits alone (else None)."""
         bm = self.model
         q_t = step.q_target
         impact = self.hybrid.impact(q_t)
@@ -221,7 +245,10 @@ class GaitPlanner:
             # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
             # eqs. (6)-(10) consistent.
             lp, slack = lp.reachable()
-        sol = solve_impulses(lp, problem.effort, problem.options)
+        sol = solve_impulses(lp, problem.effort, problem.impulse_options)
+        within_limits = None
+        if not sol.success and problem.impulse_options != problem.limit_options:
+            within_limits = solve_impulses(lp, problem.effort, problem.limit_options)
         xd_b, xd_a = lp.xd_b, lp.xd_a
         new_foot = bm.swing_tip(q_t)
         origin = np.zeros(3)
@@ -243,7 +270,7 @@ class GaitPlanner:
             new_stance_tip_speed_after=speed_after,
             impulse_friction_ratios=friction_ratios(sol.x),
             max_intermediate_joint_rate=float(np.max(np.abs(np.concatenate([sol.xd_minus[5:], sol.xd_plus[5:]])))),
-        )
+        ), within_limits
 
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:
         times = np.linspace(0.0, period, self.settings.samples)

@@ -1,0 +1,36 @@
+"""``biped-gait plan``: one gait, its summary printed; ``--json`` its every figure, ``--out DIR``
+the JSON and a figure of the step. Exit status 1 when the gait is not admissible."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+from ..arguments import check_output_folder, request_fields
+from ..core.gait import views
+from ..core.gait.planner import GaitPlanner, GaitRequest
+from .output import check_json, write_json
+
+JSON_NAME = "plan.json"
+FIGURE_NAME = "plan.png"
+
+
+def run(args: argparse.Namespace) -> int:
+    check_json(args.json)
+    if args.out is not None:
+        check_output_folder(args.out, "--out", force=True)
+    fields = request_fields(args, exclude=("params",))
+    request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
+    gait = GaitPlanner(args.params).plan(request)
+    print(views.summary(gait))
+    written = [write_json(args.json, views.to_dict(gait))]
+    if args.out is not None:
+        from ..studies.figures import plan_figure, save  # matplotlib only when a figure is asked
+
+        written += [write_json(str(args.out / JSON_NAME), views.to_dict(gait)),
+                    save(plan_figure(gait), Path(args.out) / FIGURE_NAME)]
+    files = [str(path) for path in written if path is not None]
+    if files:
+        print("written: " + ", ".join(files))
+    return 0 if gait.admissible else 1
