@@ -66,11 +66,6 @@ def _help(option: GaitOption) -> str:
     return f"{option.help}{unit}; default {option.default_text(cli=True)}"
 
 
-def _number(text: str) -> float:
-    """A float of the command line ('nan' and 'inf' included, which the core judges)."""
-    return float(text)
-
-
 def add_point(parser: argparse.ArgumentParser, step_length: str = ONE, period: str = ONE, alpha: str | None = ONE,
               alpha_default: str | None = None) -> None:
     """The gait's point: L (m), T (s) and alpha (deg), each as ``ONE`` value, ``MANY`` (a list
@@ -83,19 +78,19 @@ def add_point(parser: argparse.ArgumentParser, step_length: str = ONE, period: s
         flag, unit = option.cli_flag, option.cli_unit
         default = option.to_cli(option.default)
         if how == ONE:
-            parser.add_argument(flag, type=_number, default=default, metavar=unit.upper().replace("/", "_") or "V",
+            parser.add_argument(flag, type=float, default=default, metavar=unit.upper().replace("/", "_") or "V",
                                 help=f"{option.help} ({unit}), default {default:g}")
             continue
         if how == MANY:
             group = parser.add_mutually_exclusive_group()
-            group.add_argument(flag, nargs="+", type=_number, metavar="V",
+            group.add_argument(flag, nargs="+", type=float, metavar="V",
                                help=f"{option.help} ({unit}): values, default {alpha_default or f'{default:g}'}")
             target = group
         else:
             target = parser
         range_default = list(ALPHA_RANGE_DEG) if how == RANGE else None
         shown = f", default {' '.join(f'{v:g}' for v in ALPHA_RANGE_DEG)}" if how == RANGE else ""
-        target.add_argument(f"{flag}-range", nargs=3, type=_number, metavar=("START", "STOP", "STEP"),
+        target.add_argument(f"{flag}-range", nargs=3, type=float, metavar=("START", "STOP", "STEP"),
                             default=range_default, help=f"{option.help} ({unit}): START to STOP inclusive, every STEP"
                             f"{shown}")
 
@@ -110,7 +105,7 @@ def add_gait_options(parser: argparse.ArgumentParser, modes: str = ONE, mode_def
         if option.choices:
             kwargs["choices"] = option.choices
         elif isinstance(option.default, float):
-            kwargs["type"] = _number
+            kwargs["type"] = float
             kwargs["metavar"] = option.cli_unit.upper().replace("/", "_") or "V"
         if option.name == "mode" and modes == MANY:
             kwargs.update(nargs="+", default=list(mode_default or (option.default,)))

@@ -78,7 +78,7 @@ CASES = [
     ("biped-gait", ["sweep", "--out", "a_file"], "is a file, not a folder"),
     ("biped-gait", ["sweep", "--workers", "0"], "the number of workers must be at least 1"),
     ("biped-gait", ["figure", "fig4", "--out", "a_file/fig4.png"], "a_file is not a folder"),
-    ("biped-gait", ["urdf", "--output", "a_file/biped.urdf"], "a_file is not a folder"),
+    ("biped-gait", ["urdf", "--out", "a_file/biped.urdf"], "a_file is not a folder"),
     ("biped-gait", ["recover", "binary.yaml"], "binary.yaml: not an MCAP file"),
 ]
 

@@ -28,6 +28,7 @@ from ..core.gait.gait import Gait
 
 LINE_STYLES = {GaitMode.NORMAL.value: "-", GaitMode.ANTI_NORMAL.value: "--"}
 DPI = 120
+MAX_CURVES = 8  # curves of one W-vs-T figure: more cannot be told apart
 
 
 def _new_figure() -> tuple[Figure, object]:
@@ -185,8 +186,9 @@ def plan_figure(gait: Gait) -> Figure:
 
 def sweep_figures(results: Sequence[Gait], out_dir: Path) -> list[Path]:
     """The figures of a sweep in ``out_dir``; returns the paths: ``W_vs_alpha_L{L}_T{T}.png``
-    per (L, T) swept over two or more alphas, ``W_vs_T_L{L}_alpha{deg}.png`` per (L, alpha)
-    swept over two or more periods; if neither, the W-vs-alpha points per (L, T)."""
+    per (L, T) swept over two or more alphas; ``W_vs_T_L{L}.png`` per L swept over two or more
+    periods, one curve per alpha (``MAX_CURVES`` of them, evenly spaced, when more were swept);
+    if neither, the W-vs-alpha points per (L, T)."""
     def groups(key) -> dict[tuple, list[Gait]]:
         out: dict[tuple, list[Gait]] = {}
         for r in results:
@@ -197,15 +199,19 @@ def sweep_figures(results: Sequence[Gait], out_dir: Path) -> list[Path]:
         return len({getattr(r, field) for r in case})
 
     by_alpha = groups(lambda r: (r.step_length, r.period))
-    by_period = groups(lambda r: (r.step_length, r.arm_amplitude))
+    by_length = groups(lambda r: r.step_length)
+    periods_swept = any(count(case, "period") > 1 for case in by_length.values())
     paths = []
     for (length, period), case in by_alpha.items():
-        if count(case, "arm_amplitude") > 1 or all(count(c, "period") < 2 for c in by_period.values()):
+        if count(case, "arm_amplitude") > 1 or not periods_swept:
             title = f"W against alpha, L = {length:g} m, T = {period:g} s, params {case[0].params}"
             paths.append(save(effort_figure(case, title=title), out_dir / f"W_vs_alpha_L{length:.3f}_T{period:.3f}.png"))
-    for (length, alpha), case in by_period.items():
+    for length, case in by_length.items():
         if count(case, "period") > 1:
-            deg = math.degrees(alpha)
-            title = f"W against T, L = {length:g} m, alpha = {deg:.4g} deg, params {case[0].params}"
-            paths.append(save(period_figure(case, title=title), out_dir / f"W_vs_T_L{length:.3f}_alpha{deg:.2f}.png"))
+            alphas = sorted({r.arm_amplitude for r in case})
+            shown = [alphas[round(k)] for k in np.linspace(0, len(alphas) - 1, min(len(alphas), MAX_CURVES))]
+            note = f" ({len(shown)} of {len(alphas)} amplitudes)" if len(shown) < len(alphas) else ""
+            title = f"W against T, L = {length:g} m, params {case[0].params}{note}"
+            curves = [r for r in case if r.arm_amplitude in shown]
+            paths.append(save(period_figure(curves, title=title), out_dir / f"W_vs_T_L{length:.3f}.png"))
     return paths
