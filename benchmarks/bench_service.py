@@ -33,7 +33,7 @@ from std_msgs.msg import Header  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
-from biped_gait.ros.client import ClientSide  # noqa: E402
+from biped_gait.ros.client import ClientSide, plan_request  # noqa: E402
 from biped_gait.ros.conversions import plan_msg  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 from biped_gait.ros.planner_node import without_trajectory  # noqa: E402
@@ -103,8 +103,8 @@ def main() -> None:
     parser.add_argument("--calls", type=int, default=1000)
     parser.add_argument("--uncached-calls", type=int, default=1000)
     args = parser.parse_args()
-    cached = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
-    compact = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
+    cached = plan_request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
+    compact = plan_request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
     results: dict[str, list[float]] = {}
     alone: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -137,7 +137,7 @@ def main() -> None:
                     alpha = 0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0)
                     name = f"uncached, recording {'on' if record == 'true' else 'off'}"
                     results.setdefault(name, []).append(round_trip(
-                        side, clients[record], PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
+                        side, clients[record], plan_request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
         finally:
             side.close()
             for proc in planners.values():

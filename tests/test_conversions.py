@@ -4,6 +4,7 @@ and the constants the offline readers use agree with the generated interfaces.""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -23,7 +24,8 @@ from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
 from biped_gait.core.model.urdf import PHYSICAL_JOINTS, physical_joint_array  # noqa: E402
 from biped_gait.core.walking.walk import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
-from biped_gait.ros.conversions import mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key  # noqa: E402
+from biped_gait.ros.conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, mode_from_msg, orbit_from_msg,  # noqa: E402
+                                        plan_msg, request_from_msg, request_key)
 
 pytestmark = pytest.mark.ros
 
@@ -81,11 +83,17 @@ def test_a_failed_solve_becomes_nan_and_its_reasons(planner):
     assert not orbit_from_msg(msg).converged
 
 
-def test_requests_take_the_defaults_and_unknown_modes_are_refused():
-    req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL)
+def test_requests_carry_the_vocabulary_without_sentinels_and_unknown_modes_are_refused():
+    req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL,
+                           friction=math.nan, rate_bound=math.inf)
     core = request_from_msg(req, "aoustin2013")
-    assert core == GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013", "theta", "l1")
-    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1", None, math.inf, "joint")
+    assert core == dataclasses.replace(GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013"), friction=core.friction)
+    assert math.isnan(core.friction) and core.rate_bound == math.inf
+    # a field left at the message's 0 is a value, not "the default": a frictionless floor, refused
+    assert request_from_msg(PlanGait.Request(), "aoustin2013").friction == 0.0
+    key = request_key(gait_fields(req, "aoustin2013", (*POINT_NAMES, *OPTION_NAMES)))
+    assert key == request_key(gait_fields(req, "aoustin2013", (*POINT_NAMES, *OPTION_NAMES)))  # NaN keys match
+    assert dict(key)["friction"] == "nan" and dict(key)["mode"] == "anti-normal"
     with pytest.raises(ValueError, match="unknown gait mode 7"):
         request_from_msg(PlanGait.Request(mode=7), "aoustin2013")
 

@@ -21,7 +21,7 @@ from rosbags.highlevel import AnyReader
 from biped_gait.core.model.biped import JOINT_NAMES
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.model.urdf import PHYSICAL_JOINTS, physical_joint_array
-from biped_gait.ros.client import ClientSide
+from biped_gait.ros.client import ClientSide, optimize_goal, plan_request
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
@@ -31,10 +31,6 @@ pytestmark = pytest.mark.ros
 
 SERVICE = "/biped_gait_planner/plan_gait"
 TOPIC = "/biped_gait_planner/gait_plan"
-
-
-def plan_request(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5), mode=PlanGait.Request.NORMAL, **kw):
-    return PlanGait.Request(step_length=step_length, period=period, arm_amplitude=arm_amplitude, mode=mode, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -211,8 +207,7 @@ def send_goal(ros, client, **goal):
     from biped_gait_interfaces.action import OptimizeArmSwing
 
     feedback = []
-    request = OptimizeArmSwing.Goal(step_length=0.45, period=0.45, mode=PlanGait.Request.NORMAL,
-                                    alpha_min=0.0, alpha_max=math.radians(45.0), **goal)
+    request = optimize_goal(**goal)
     sent = client.send_goal_async(request, feedback_callback=lambda m: feedback.append(m.feedback))
     ros.wait(sent.done, 30.0)
     handle = sent.result()
@@ -255,7 +250,7 @@ def test_the_action_reports_progress_and_finds_the_optimum(ros, action_client, p
 def test_the_action_can_be_canceled(ros, action_client):
     from action_msgs.msg import GoalStatus
 
-    handle, feedback = send_goal(ros, action_client)
+    handle, feedback = send_goal(ros, action_client, period=0.46)  # not the cached goal of the test before
     ros.wait(lambda: len(feedback) >= 3, 60.0)
     cancel = handle.cancel_goal_async()
     ros.wait(cancel.done, 30.0)

@@ -33,7 +33,7 @@ from std_msgs.msg import String, UInt64
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
-from biped_gait.ros.client import ClientSide
+from biped_gait.ros.client import ClientSide, plan_request
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 from biped_gait_interfaces.srv import PlanGait
 
@@ -99,7 +99,7 @@ def test_clock_tf_and_the_recording_as_users_expect(planner_node, side, tmp_path
     # the planner on simulated time stamps its plans with it
     client = side.node.create_client(PlanGait, f"/{PLANNER}/plan_gait")
     side.connect(client)
-    plan = side.call(client, PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.41)).plan
+    plan = side.call(client, plan_request(step_length=0.45, period=0.45, arm_amplitude=0.41)).plan
     assert 0 < ns(plan.header.stamp) < 10e9
     # /tf received live is what was recorded, message for message
     [bag] = list((tmp_path / "bags").iterdir())

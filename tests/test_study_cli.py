@@ -152,3 +152,36 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
+
+
+@pytest.mark.parametrize("options, alpha, effort", [
+    ([], 23.66, 32.78),  # the friction cone of the parameter set, mu = 0.5
+    (["--friction", "inf"], 27.04, 31.24),  # no cone: the paper's LP
+    (["--effort-coordinates", "absolute"], 19.53, 59.72),  # the absolute reading, with the cone
+    (["--effort-coordinates", "absolute", "--friction", "inf"], 23.89, 56.31),  # the absolute reading, no cone
+])
+def test_optimize_arms_reproduces_the_results_pages_optima(options, alpha, effort):
+    """The rows of docs/results.md's table at L = T = 0.45 (two decimals there), from the CLI."""
+    proc = run("optimize-arms", *options, "--json", "-")
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout)
+    assert result["interior"] and result["where"] == "interior minimum"
+    assert result["alpha_deg"] == pytest.approx(alpha, abs=0.006) and result["W"] == pytest.approx(effort, abs=0.006)
+    assert result["gait"]["friction"] == (None if "inf" in options else 0.5)  # inf is null in JSON
+    assert "optimal arm amplitude alpha*" in proc.stderr  # the text goes to stderr with --json -
+
+
+def test_every_gait_verb_writes_its_json(tmp_path):
+    out = tmp_path / "plan"
+    proc = run("plan", "--min-clearance", "0.005", "--out", str(out), "--json", str(tmp_path / "plan.json"))
+    assert proc.returncode == 1, proc.stderr  # it meets the limits, not the margin
+    assert "not admissible: meets the limits but not the margins: swing clearance" in proc.stdout
+    document = json.loads((tmp_path / "plan.json").read_text())
+    assert document == json.loads((out / "plan.json").read_text())
+    assert document["within_limits"] is True and document["admissible"] is False and document["min_clearance"] == 0.005
+    assert (out / "plan.png").read_bytes()[:8] == PNG_SIGNATURE
+    figure = run("figure", "fig5", "--alpha-deg-range", "0", "45", "5", "--out", str(tmp_path / "fig5.png"),
+                 "--workers", "1", "--json", "-")
+    assert figure.returncode == 0, figure.stderr
+    momentum = json.loads(figure.stdout)["momentum"]
+    assert set(momentum) == {"normal", "anti-normal"} and len(momentum["normal"]["t"]) == len(momentum["normal"]["h_vertical"])

@@ -77,7 +77,7 @@ class PlannedOrbit:
         """The orbit of a solved ``gait.Gait``."""
         return cls(gait.problem.params, gait.step_length, gait.period, gait.arm_amplitude, gait.mode,
                    gait.problem.effort, gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b,
-                   gait.converged, gait.admissible, gait.reasons, gait.problem.options)
+                   gait.converged, gait.admissible, gait.reasons, gait.problem.impulse_options)
 
 
 class Fall(Exception):
