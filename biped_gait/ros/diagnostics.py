@@ -12,7 +12,7 @@ from __future__ import annotations
 import statistics
 import threading
 from collections import deque
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -69,11 +69,12 @@ def _text(value: object) -> str:
 
 
 class Counters:
-    """Thread-safe counts by name and the recent durations of one kind of work (s)."""
+    """Thread-safe counts of the ``names`` (0 until counted) and the recent durations of one
+    kind of work (s)."""
 
-    def __init__(self) -> None:
+    def __init__(self, names: Sequence[str]) -> None:
         self._lock = threading.Lock()
-        self._counts: dict[str, int] = {}
+        self._counts: dict[str, int] = dict.fromkeys(names, 0)
         self._times: deque[float] = deque(maxlen=RECENT)
         self._max = 0.0
 

@@ -143,7 +143,8 @@ class GaitPlannerNode(Node):
         self._sequence = 0
         self._closing = threading.Event()
         self._in_flight = InFlight()
-        self.stats = Counters()
+        self.stats = Counters(("requests", "solves", "cache_hits", "refusals", "optimizations",
+                               "optimization_cache_hits"))
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
         self._record_dir = value["record_dir"]
@@ -228,8 +229,8 @@ class GaitPlannerNode(Node):
         figures["recording"] = recorder.path if recorder is not None else "off"
         if recorder is not None and recorder.failure:
             return Report(WARN, f"serving; recording failed: {clip(recorder.failure)}", figures)
-        return Report(OK, f"serving: {figures.get('requests', 0)} requests, {figures.get('solves', 0)} solves, "
-                      f"{figures.get('cache_hits', 0)} cache hits, {figures.get('refusals', 0)} refused", figures)
+        return Report(OK, f"serving: {figures['requests']} requests, {figures['solves']} solves, "
+                      f"{figures['cache_hits']} cache hits, {figures['refusals']} refused", figures)
 
     def _planner(self, params: str, group: str) -> GaitPlanner:
         """The planner of ``group`` for parameter set ``params`` (created on first use)."""

@@ -107,8 +107,9 @@ def _gait_parameter(option: GaitOption) -> Param:
     if option.name == "params":
         return Param("params", "", "parameter set of the requested plan (a shipped name or a YAML file path); empty: "
                      "the planner's. A plan from the wire is walked only with a shipped set or this file")
-    unit = f" ({option.unit}{'; the biped-gait command takes degrees' if option.degrees else ''})" if option.unit else ""
-    return Param(option.name, option.default, f"{option.help} of the requested plan{unit}", choices=option.choices,
+    unit = " (rad here; the biped-gait command takes degrees)" if option.degrees else (
+        f" ({option.unit})" if option.unit else "")
+    return Param(option.name, option.default, f"{option.help}{unit}; for the requested plan", choices=option.choices,
                  finite=False)
 
 
@@ -169,7 +170,7 @@ class SimulatorNode(Node):
         self.recorder: BackgroundRecorder | None = None
         self.live: LiveView | None = None
         self.walk_state = "starting"
-        self.stats = Counters()
+        self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
         gait = {name: value[name] for name in GAIT_NAMES}
         try:
@@ -295,8 +296,7 @@ class SimulatorNode(Node):
             return Report(ERROR, f"{figures['state']}{': recording failed: ' + clip(failure) if failure else ''}", figures)
         if self.walk_state.startswith("waiting"):
             return Report(WARN, self.walk_state, figures)
-        return Report(OK, f"{figures['state']}: {figures.get('touchdowns', 0)} steps, {figures.get('falls', 0)} falls",
-                      figures)
+        return Report(OK, f"{figures['state']}: {figures['touchdowns']} steps, {figures['falls']} falls", figures)
 
     @property
     def exit_status(self) -> int:
