@@ -20,7 +20,7 @@ import sys
 import warnings
 
 from .arguments import STDOUT
-from .cli_parser import PROG, parser
+from .cli_parser import PROG, build_parser
 
 INTERRUPTED = 130  # exit status after Ctrl-C, as shells report it
 
@@ -32,7 +32,7 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``biped-gait``; returns the process exit status."""
-    args = parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     warnings.showwarning = _one_line_warning
     module, function = args.run.split(":")
     to_stdout = getattr(args, "json", None) == STDOUT

@@ -45,8 +45,8 @@ def _plan(sub) -> None:
     add_point(plan)
     add_gait_options(plan)
     add_json(plan, "the full result (every figure and the sampled step)")
-    plan.add_argument("--out", type=Path, metavar="DIR", help="write plan.json and plan.png (the step: joint angles, "
-                      "swing-tip height, ground reaction, yaw momentum) in this folder")
+    plan.add_argument("--out", type=Path, metavar="DIR", help="write plan.json and plan.png (the step: the biped from "
+                      "the side, joint angles, ground reaction and friction ratio, yaw momentum) in this folder")
     _run(plan, "plan:run")
 
 
@@ -179,7 +179,7 @@ def _files(sub) -> None:
     _run(recover, "files:recover")
 
 
-def parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
     """The ``biped-gait`` parser with every verb."""
     top = OneLineParser(prog=PROG, description=DESCRIPTION)
     sub = top.add_subparsers(dest="command", required=True, metavar="VERB")

@@ -102,3 +102,36 @@ def test_the_offline_constants_agree_with_the_interfaces():
     assert {kind.name: int(kind) for kind in EventKind} == {
         name: getattr(GaitEvent, name) for name in ("TOUCHDOWN", "FALL", "FINISHED", "NOT_STARTED", "PUSH")}
     assert MODE_CODES == {PlanGait.Request.NORMAL: GaitMode.NORMAL, PlanGait.Request.ANTI_NORMAL: GaitMode.ANTI_NORMAL}
+
+
+def test_the_interfaces_and_the_simulators_parameters_carry_the_gait_vocabulary():
+    """Every option on the service, the action, the recorded call, the echo of the plan and the
+    simulator's parameters, with the vocabulary's default wherever a .srv can hold it."""
+    from biped_gait.gait_options import OPTIONS, POINT
+    from biped_gait.ros.simulator_node import PARAMETERS
+    from biped_gait_interfaces.action import OptimizeArmSwing
+    from biped_gait_interfaces.msg import PlanGaitCall
+
+    request, goal = PlanGait.Request(), OptimizeArmSwing.Goal()
+    fields = set(PlanGait.Request.get_fields_and_field_types())
+    assert {o.name for o in (*POINT, *OPTIONS)} <= fields
+    assert {o.name for o in OPTIONS} | {"step_length", "period", "alpha_min", "alpha_max", "alpha_step"} <= set(
+        OptimizeArmSwing.Goal.get_fields_and_field_types())
+    assert fields <= set(PlanGaitCall.get_fields_and_field_types())  # a recorded call holds every field
+    assert {"min_clearance", "friction_margin", "within_limits", "friction", "rate_bound"} <= set(
+        GaitPlan.get_fields_and_field_types())
+    parameters = {p.name: p for p in PARAMETERS}
+    for option in (*POINT, *OPTIONS):
+        value = option.default
+        if option.name in ("mode", "params"):
+            continue  # a code on the wire; '' there is the planner's default set
+        if isinstance(value, str) or math.isfinite(value):  # a .srv cannot default to NaN or inf
+            assert getattr(request, option.name) == value, option.name
+            if option.name != "arm_amplitude":
+                assert getattr(goal, option.name) == value, option.name
+        assert parameters[option.name].default == value or (math.isnan(value) and math.isnan(parameters[option.name].default))
+        assert parameters[option.name].choices == option.choices
+    assert request.mode == PlanGait.Request.NORMAL and parameters["mode"].default == "normal"
+    assert (goal.alpha_min, goal.alpha_max) == pytest.approx((0.0, math.radians(45.0)), abs=1e-15)
+    assert goal.alpha_step == pytest.approx(math.radians(1.5), abs=1e-15)
+    assert parameters["optimize_arms"].default is False and parameters["arm_amplitude"].low is None  # no sentinel

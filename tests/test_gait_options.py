@@ -11,7 +11,7 @@ import shlex
 import pytest
 
 from biped_gait.arguments import request_fields
-from biped_gait.cli_parser import GAIT_VERBS, MAX_CASES, MOMENTUM_RATE, PUSH_DIRECTIONS, PUSH_PHASE, parser
+from biped_gait.cli_parser import GAIT_VERBS, MAX_CASES, MOMENTUM_RATE, PUSH_DIRECTIONS, PUSH_PHASE, build_parser
 from biped_gait.core.dynamics.impulses import COORDINATES, EFFORTS
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.gait.bvp import CLOSURES
@@ -32,7 +32,7 @@ FIRST = {"figure": ["fig4"]}  # a verb's positional arguments
 
 
 def parse(verb: str, *args: str):
-    return parser().parse_args([*verb.split(), *FIRST.get(verb, []), *args])
+    return build_parser().parse_args([*verb.split(), *FIRST.get(verb, []), *args])
 
 
 def test_the_vocabulary_is_the_core_requests():
@@ -89,7 +89,7 @@ def test_amplitude_ranges_are_spelled_alike(verb):
 ])
 def test_the_old_dialects_are_gone(capsys, line, message):
     with pytest.raises(SystemExit) as exit_:
-        parser().parse_args(shlex.split(line))
+        build_parser().parse_args(shlex.split(line))
     assert exit_.value.code == 2 and message in capsys.readouterr().err
 
 

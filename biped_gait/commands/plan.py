@@ -22,14 +22,15 @@ def run(args: argparse.Namespace) -> int:
         check_output_folder(args.out, "--out", force=True)
     fields = request_fields(args, exclude=("params",))
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
-    gait = GaitPlanner(args.params).plan(request)
+    planner = GaitPlanner(args.params)
+    gait = planner.plan(request)
     print(views.summary(gait))
     written = [write_json(args.json, views.to_dict(gait))]
     if args.out is not None:
         from ..studies.figures import plan_figure, save  # matplotlib only when a figure is asked
 
         written += [write_json(str(args.out / JSON_NAME), views.to_dict(gait)),
-                    save(plan_figure(gait), Path(args.out) / FIGURE_NAME)]
+                    save(plan_figure(gait, planner.model), Path(args.out) / FIGURE_NAME)]
     files = [str(path) for path in written if path is not None]
     if files:
         print("written: " + ", ".join(files))

@@ -17,12 +17,14 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
+from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ..core.gait.configurations import GaitMode
-from ..core.model.biped import JOINT_NAMES
+from ..core.model.biped import JOINT_NAMES, SWING_TIP, BipedModel
 from .optimize import ArmOptimum
 from ..core.gait.gait import Gait
 
@@ -148,24 +150,61 @@ def momentum_figure(optimum: Gait, other: Gait) -> Figure:
     return fig
 
 
-def plan_figure(gait: Gait) -> Figure:
-    """The ballistic step of a planned gait over t in [0, T]: the joint angles (deg), the
-    vertical ground reaction (N) and the friction ratio |F_xy| / F_z against the coefficient,
-    the yaw angular momentum about the stance foot (kg m^2/s)."""
-    fig = Figure(figsize=(11.0, 4.2), layout="constrained")
+def skeleton(model: BipedModel, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    """The biped's segments at configuration ``q`` of the single-support model (m; stance tip at
+    the origin): (start, end, part) from each joint to its parent's, the swing shin to its tip,
+    and each arm (``part``: 'arm' or 'body')."""
+    pin_model, data = model.single, model.single_data
+    pin.forwardKinematics(pin_model, data, q)
+    pin.updateFramePlacements(pin_model, data)
+    segments = []
+    for joint in range(2, pin_model.njoints):
+        start = data.oMi[pin_model.parents[joint]].translation.copy()
+        segments.append((start, data.oMi[joint].translation.copy(), "body"))
+        if "shoulder" in pin_model.names[joint]:
+            hand = data.oMi[joint].act(np.array([0.0, 0.0, -model.params.arm.length]))
+            segments.append((data.oMi[joint].translation.copy(), hand, "arm"))
+    knee = pin_model.getJointId("swing_knee")
+    segments.append((data.oMi[knee].translation.copy(), data.oMf[pin_model.getFrameId(SWING_TIP)].translation.copy(), "body"))
+    return segments
+
+
+def _draw_skeletons(ax, model: BipedModel, gait: Gait, snapshots: int = 5) -> None:
+    """The biped seen from the side (x forward, z up, m) at ``snapshots`` instants of the step."""
+    samples = gait.figures.samples
+    for k, index in enumerate(np.linspace(0, len(samples.t) - 1, snapshots).round().astype(int)):
+        colour = colormaps["viridis"](k / max(1, snapshots - 1))
+        for n, (start, end, part) in enumerate(skeleton(model, samples.q[index])):
+            ax.plot([start[0], end[0]], [start[2], end[2]], color=colour, linewidth=2.6 if part == "arm" else 1.6,
+                    solid_capstyle="round", label=f"t = {samples.t[index]:.2f} s" if n == 0 else None)
+    ax.axhline(0.0, color="grey", linewidth=0.8)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x, forward (m)")
+    ax.set_ylabel("z, up (m)")
+    ax.set_title("the step from the side (arms thicker)", fontsize="medium")
+    ax.legend(fontsize="x-small", loc="upper left")
+
+
+def plan_figure(gait: Gait, model: BipedModel) -> Figure:
+    """The ballistic step of a planned gait over t in [0, T]: the biped from the side at five
+    instants (``model``: the planner's), the joint angles (deg), the vertical ground reaction (N)
+    and the friction ratio |F_xy| / F_z against the coefficient, the yaw angular momentum about
+    the stance foot (kg m^2/s)."""
+    fig = Figure(figsize=(14.0, 4.8), layout="constrained")
     FigureCanvasAgg(fig)
-    angles, reaction, momentum = (fig.add_subplot(1, 3, k + 1) for k in range(3))
+    side, angles, reaction, momentum = (fig.add_subplot(1, 4, k + 1) for k in range(4))
     title = (f"L = {gait.step_length:g} m, T = {gait.period:g} s, alpha = {math.degrees(gait.arm_amplitude):.1f} deg, "
              f"{gait.mode}, params {gait.params}: {'admissible' if gait.admissible else 'not admissible'}")
     fig.suptitle(title, fontsize="medium")
     if gait.figures is None or gait.figures.samples is None:
         angles.text(0.5, 0.5, "no converged step", transform=angles.transAxes, ha="center")
         return fig
+    _draw_skeletons(side, model, gait)
     t, q, grf = gait.figures.samples.t, gait.figures.samples.q, gait.figures.grf
     for name, column in zip(JOINT_NAMES, q.T):
         angles.plot(t, np.degrees(column), label=name.replace("_", " "))
     angles.set_ylabel("joint angle (deg)")
-    angles.legend(fontsize="x-small", ncols=2)
+    angles.legend(fontsize="xx-small", ncols=3, loc="upper center", bbox_to_anchor=(0.5, -0.16))
     reaction.plot(t, grf[:, 2], color="C0")
     reaction.set_ylabel("vertical ground reaction F_z (N)", color="C0")
     ratio = reaction.twinx()
@@ -177,7 +216,7 @@ def plan_figure(gait: Gait) -> Figure:
     ratio.set_ylabel("friction ratio |F_xy| / F_z", color="C3")
     momentum.plot(t, gait.figures.h_vertical, color="C2")
     momentum.axhline(0.0, color="grey", linewidth=0.5)
-    momentum.set_ylabel("yaw angular momentum about the stance foot (kg m^2/s)")
+    momentum.set_ylabel("yaw momentum about the stance foot (kg m^2/s)")
     for ax in (angles, reaction, momentum):
         ax.set_xlabel("time in the step t (s)")
         ax.grid(True, alpha=0.3)
