@@ -59,7 +59,7 @@ from .diagnostics import OK, WARN, Counters, Diagnostics, Report
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
-from .recorded import RecordedPublisher
+from .recorded import RecordedPublisher, finish_recording
 
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
@@ -210,14 +210,7 @@ class GaitPlannerNode(Node):
     def _stop_recording(self) -> None:
         """Finish the recording (what is queued is written)."""
         recorder, self.recorder = self.recorder, None
-        for publisher in self._recordings:
-            publisher.record_to(None)
-        try:
-            recorder.close()
-        except RecordingError as exc:
-            self.get_logger().error(str(exc))
-        else:
-            self.get_logger().info(f"recording finalized: {recorder.path}")
+        finish_recording(self._recordings, recorder, self.get_logger())
 
     def _report(self) -> Report:
         """The planning part of ``/diagnostics``."""
@@ -272,10 +265,7 @@ class GaitPlannerNode(Node):
         only the margins says so) and, when the atlas knows, where the nearest admissible gaits are."""
         fields = gait_fields(request, self._default_params, (*POINT_NAMES, *OPTION_NAMES))
         key = request_key(fields)
-        with self._cache_lock:
-            cached = self._cache.get(key)
-            if cached is not None:
-                self._cache.move_to_end(key)
+        cached = self._cached(self._cache, key)
         if cached is not None:
             self.stats.count("cache_hits")
             response.success = cached.success
@@ -298,6 +288,14 @@ class GaitPlannerNode(Node):
         self._keep(self._cache, key, answer)
         if gait.admissible:
             self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
+
+    def _cached(self, cache: OrderedDict, key: tuple):
+        """The answer ``cache`` keeps for ``key`` (made its most recent), or None."""
+        with self._cache_lock:
+            answer = cache.get(key)
+            if answer is not None:
+                cache.move_to_end(key)
+        return answer
 
     def _keep(self, cache: OrderedDict, key: tuple, answer: object) -> None:
         """Keep ``answer`` in ``cache`` (the oldest beyond ``cache_size`` dropped)."""
@@ -349,10 +347,7 @@ class GaitPlannerNode(Node):
         except ValueError as exc:
             return self._refuse_goal(goal_handle, OptimizeArmSwing.Result(message=clip(str(exc))))
         key = request_key(fields)
-        with self._cache_lock:
-            cached = self._goal_cache.get(key)
-            if cached is not None:
-                self._goal_cache.move_to_end(key)
+        cached = self._cached(self._goal_cache, key)
         if cached is not None:
             self.stats.count("optimization_cache_hits")
             result = copy.copy(cached)

@@ -7,7 +7,7 @@ topic's last message goes to the new one at once, as a late subscriber would get
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 from rclpy.node import Node
@@ -15,6 +15,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import serialize_message
 
 from ..recording.background import BackgroundRecorder
+from ..recording.writer import RecordingError
 from ..recording.schemas import type_name
 from .qos import describe
 
@@ -87,3 +88,16 @@ class RecordedPublisher:
     def subscription_count(self) -> int:
         """Subscribers matched to the live publisher (0 if recorded only)."""
         return self.publisher.get_subscription_count() if self.publisher is not None else 0
+
+
+def finish_recording(publishers: Sequence[RecordedPublisher], recorder: BackgroundRecorder, logger) -> None:
+    """Stop ``publishers`` recording to ``recorder`` and finish its file (what is queued is
+    written): a run-time ``record: false``; a failure is one error line of ``logger``."""
+    for publisher in publishers:
+        publisher.record_to(None)
+    try:
+        recorder.close()
+    except RecordingError as exc:
+        logger.error(str(exc))
+    else:
+        logger.info(f"recording finalized: {recorder.path}")

@@ -91,7 +91,7 @@ from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
 from .push_service import SCRIPT_FORMAT, PushScheduler, parse_pushes
-from .recorded import RecordedPublisher
+from .recorded import RecordedPublisher, finish_recording
 from .sim_clock import SimClock
 from .sim_controls import SimControls
 from .speed_command import SpeedCommand
@@ -265,14 +265,7 @@ class SimulatorNode(Node):
                     publisher.record_to(self.recorder)
             elif name == "record" and not value and self.recorder is not None:
                 recorder, self.recorder = self.recorder, None
-                for publisher in self._outputs:
-                    publisher.record_to(None)
-                try:
-                    recorder.close()
-                except RecordingError as exc:
-                    self.get_logger().error(str(exc))
-                else:
-                    self.get_logger().info(f"recording finalized: {recorder.bag_dir}")
+                finish_recording(self._outputs, recorder, self.get_logger())
             elif name == "live_view" and value and self.live is None:
                 self.live = self._start_live_view()
                 for publisher in self._outputs:
