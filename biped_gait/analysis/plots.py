@@ -82,7 +82,7 @@ def _top_view_figure(fig, walk: Walk) -> None:
     ax.set_ylabel("y (m, scale stretched)")
     ax.set_title("Centre of mass and stance feet, seen from above")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
+    fig.legend(fontsize="small", loc="outside lower center", ncols=3)  # below: the feet's labels fill the plot
 
 
 def write_plots(walk: Walk, out_dir: Path) -> list[Path]:

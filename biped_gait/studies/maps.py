@@ -198,24 +198,28 @@ def region_figure(maps: WalkingMaps) -> Figure:
 
 
 def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure, digits: int = 1,
-                 mark_ends: bool = False) -> None:
+                 mark_ends: bool = False) -> list:
     """Tiles of ``values`` at the optima's (L, T), each with its value in ``digits`` decimals
-    (as many as the colour bar's range needs to tell the tiles apart); ``mark_ends``: outline
-    the tiles whose least W is at an end of the alpha range (no interior minimum) and say so."""
+    (as many as the colour bar's range needs to tell the tiles apart), dark text on light tiles;
+    ``mark_ends``: outline the tiles whose least W is at an end of the alpha range (no interior
+    minimum). Returns the legend handle of the outline (empty list if none)."""
     lengths = [o.step_length for o in maps.optima]
     periods = [o.period for o in maps.optima]
     points = ax.scatter(lengths, periods, c=values, s=420, marker="s", cmap="viridis")
     for x, y, v in zip(lengths, periods, values):
+        red, green, blue, _ = points.cmap(points.norm(v)) if math.isfinite(v) else (0, 0, 0, 1)
+        light = 0.299 * red + 0.587 * green + 0.114 * blue > 0.55
         ax.annotate(f"{v:.{digits}f}" if math.isfinite(v) else "-", (x, y), ha="center", va="center", fontsize=7.5,
-                    color="white", fontweight="bold")
+                    color="black" if light else "white", fontweight="bold")
     ends = [(o.step_length, o.period) for o in maps.optima if not o.interior]
+    handles = []
     if mark_ends and ends:
-        ax.scatter(*zip(*ends), s=420, marker="s", facecolors="none", edgecolors="#e41a1c", linewidths=1.8,
-                   label="least W at an end of the range (no interior minimum)")
-        ax.legend(fontsize="x-small", loc="upper right")
+        handles.append(ax.scatter(*zip(*ends), s=420, marker="s", facecolors="none", edgecolors="#e41a1c",
+                                  linewidths=1.8, label="least W at an end of the alpha range (no interior minimum)"))
     fig.colorbar(points, ax=ax, label=label)
     ax.set_xlabel("step length L (m)")
     ax.set_ylabel("period T (s)")
+    return handles
 
 
 def optimum_figure(maps: WalkingMaps) -> Figure:
@@ -223,9 +227,11 @@ def optimum_figure(maps: WalkingMaps) -> Figure:
     tiles without an interior minimum (alpha* at an end of the range) outlined."""
     fig, (left, right) = _figure(2)
     fig.set_size_inches(12.0, 5.2)
-    _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima], "optimal arm amplitude alpha* (deg)", fig,
-                 mark_ends=True)
+    ends = _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima], "optimal arm amplitude alpha* (deg)",
+                        fig, mark_ends=True)
     _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True)
+    if ends:
+        fig.legend(handles=ends, fontsize="small", loc="outside lower center")
     left.set_title(f"alpha*(L, T), {maps.mode} gait, params {maps.params}", fontsize="medium")
     right.set_title(f"W*(L, T), {maps.mode} gait, params {maps.params}", fontsize="medium")
     return fig

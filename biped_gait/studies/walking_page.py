@@ -180,9 +180,9 @@ def multipliers_figure(walking: Walking) -> Figure:
     lengths = [Line2D([], [], color=f"C{i}", linewidth=3, label=f"L = {length:g} m")
                for i, length in enumerate(FIG4_STEP_LENGTHS)]
     left.legend(handles=lengths + [Line2D([], [], color="k", linestyle=style, label=f"|lambda_{rank + 1}|")
-                                   for rank, style in enumerate(ranks)], fontsize="x-small", ncols=2)
+                                   for rank, style in enumerate(ranks)], fontsize="x-small", ncols=2, handlelength=3)
     right.legend(handles=lengths + [Line2D([], [], color="k", linestyle=style, marker=".", label=label)
-                                    for _, style, label in loops], fontsize="x-small")
+                                    for _, style, label in loops], fontsize="x-small", handlelength=3)
     left.set_yscale("log")
     left.set_title("Open-loop Floquet multipliers |lambda_1..4|, T = 0.45 s", fontsize="medium")
     right.set_yscale("log")
