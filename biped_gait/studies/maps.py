@@ -31,7 +31,6 @@ from matplotlib.patches import Patch
 from ..core.gait.admissibility import LIMIT_NAMES, Limit
 from ..core.gait.atlas import Atlas, NodeStatus, atlas_path
 from ..core.gait.configurations import GaitMode
-from ..core.gait.margins import Margins
 from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest, validate_request
 from .executors import planner_for

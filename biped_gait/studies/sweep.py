@@ -22,7 +22,6 @@ from ..core.gait.configurations import GaitMode
 from .executors import planner_for
 from ..core.gait.planner import GaitPlanner, GaitRequest, validate_request
 from ..core.model.params import BipedParams
-from ..core.dynamics.settings import DEFAULTS
 from ..core.gait.gait import Gait
 
 MAX_CASES = 2000  # a larger sweep must be confirmed (CLI: --yes)
