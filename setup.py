@@ -15,6 +15,7 @@ setup(
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),
+        (f"share/{PACKAGE}/config", ["config/demo.yaml"]),
     ],
     install_requires=["numpy", "scipy", "pin", "osqp", "highspy", "PyYAML"],
     entry_points={

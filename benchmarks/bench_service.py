@@ -34,7 +34,7 @@ from std_msgs.msg import Header  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
-from biped_gait.ros.client import ClientSide  # noqa: E402
+from biped_gait.ros.client import ClientSide, plan_request  # noqa: E402
 from biped_gait.ros.conversions import plan_msg, urdf_joints  # noqa: E402
 from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 from biped_gait.ros.planner_node import without_trajectory  # noqa: E402
@@ -126,7 +126,7 @@ def first_requests(side: ClientSide, where: Path, fresh: int, calls: int = 10) -
             side.connect(client)
             refused = side.call(client, PlanGait.Request(step_length=0.45, period=-1.0, arm_amplitude=ALPHA), timeout=60.0)
             assert not refused.success
-            requests = [PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.35 + 1e-3 * j)
+            requests = [plan_request(step_length=0.45, period=0.45, arm_amplitude=0.35 + 1e-3 * j)
                         for j in range(calls + 1)]
             times = [round_trip(side, client, request) for request in requests]
             first.append(times[0])
@@ -143,8 +143,8 @@ def main() -> None:
     parser.add_argument("--uncached-calls", type=int, default=1000)
     parser.add_argument("--fresh", type=int, default=3)
     args = parser.parse_args()
-    cached = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
-    compact = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
+    cached = plan_request(step_length=0.45, period=0.45, arm_amplitude=ALPHA)
+    compact = plan_request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
     results: dict[str, list[float]] = {}
     alone: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -182,7 +182,7 @@ def main() -> None:
                     alpha = 0.30 + 1e-4 * k + (1e-5 if record == "false" else 0.0)
                     name = f"uncached, recording {'on' if record == 'true' else 'off'}"
                     results.setdefault(name, []).append(round_trip(
-                        side, clients[record], PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
+                        side, clients[record], plan_request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
             for proc in planners.values():
                 stop_process(proc)
             first, after = first_requests(side, where, args.fresh)

@@ -78,14 +78,17 @@ def walk_arrays() -> dict[str, np.ndarray]:
             "touchdown_times": np.array(times)}
 
 
-def sweep_csv() -> str:
+def sweep_csv(columns: list[str] | None = None) -> str:
     """The CSV of a small sweep over alpha, both modes, through the command line (the solve times
-    left out)."""
+    left out; ``columns``: only these, in this order, which must come first)."""
     with tempfile.TemporaryDirectory() as out:
         subprocess.run([sys.executable, "-m", "biped_gait.cli", "sweep", *SWEEP_ARGS, "--workers", "1", "--out", out],
                        check=True, capture_output=True)
         rows = list(csv.reader(io.StringIO((Path(out) / "sweep.csv").read_text())))
     keep = [k for k, name in enumerate(rows[0]) if name != "solve_time_s"]
+    if columns is not None:
+        assert [rows[0][k] for k in keep[:len(columns)]] == columns, "columns were added before the stored ones"
+        keep = keep[:len(columns)]
     text = io.StringIO()
     csv.writer(text, lineterminator="\n").writerows([[row[k] for k in keep] for row in rows])
     return text.getvalue()

@@ -18,7 +18,7 @@ from pathlib import Path
 import yaml
 
 from biped_gait.analysis.cli import main
-from biped_gait.ros.client import ClientSide
+from biped_gait.ros.client import ClientSide, plan_request
 from biped_gait_interfaces.srv import PlanGait
 
 from .ros_helpers import read_bag  # rosbags: reads the files independently
@@ -41,7 +41,7 @@ def recordings(tmp_path_factory) -> tuple[Path, Path]:
         try:
             client = side.node.create_client(PlanGait, f"/{PLANNER}/plan_gait")
             side.connect(client)
-            refused = side.call(client, PlanGait.Request(step_length=math.nan, period=0.45, arm_amplitude=0.41))
+            refused = side.call(client, plan_request(step_length=math.nan, period=0.45, arm_amplitude=0.41))
             assert not refused.success
         finally:
             side.close()

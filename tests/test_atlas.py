@@ -60,7 +60,7 @@ def test_every_gait_continuation_finds_is_answered(planner, mode):
 
 
 def test_the_users_examples_are_admissible_human_like_gaits():
-    for args in (["--period", "0.55"], ["--step-length", "0.42", "--period", "0.5", "--arm-amplitude", "23.6"]):
+    for args in (["--period", "0.55"], ["--step-length", "0.42", "--period", "0.5", "--alpha-deg", "23.6"]):
         proc = run("plan", *args)
         assert proc.returncode == 0, proc.stdout + proc.stderr
         assert "admissible True" in proc.stdout and "found by atlas" in proc.stdout

@@ -42,7 +42,7 @@ def jump(gait) -> float:
 
 @pytest.mark.parametrize("index", range(len(STEP_LENGTHS)))
 def test_w_has_an_interior_minimum(planner, comparisons, index):
-    optimum = comparisons[index].normal
+    optimum = comparisons[index].optimum
     assert optimum.interior, optimum.describe()
     for end in ALPHA_RANGE:
         at_end = planner.plan(GaitRequest(STEP_LENGTHS[index], PERIOD, end, "normal"))
@@ -50,24 +50,24 @@ def test_w_has_an_interior_minimum(planner, comparisons, index):
 
 
 def test_optimal_alpha_grows_with_step_length(comparisons):
-    alphas = [c.normal.alpha for c in comparisons]
+    alphas = [c.optimum.alpha for c in comparisons]
     assert all(b - a > 10 * DEFAULTS.arm_tolerance for a, b in zip(alphas, alphas[1:])), [math.degrees(a) for a in alphas]
 
 
 def test_effort_grows_with_step_length(comparisons):
-    efforts = [c.normal.W for c in comparisons]
+    efforts = [c.optimum.W for c in comparisons]
     assert all(b > a for a, b in zip(efforts, efforts[1:])), efforts
 
 
 @pytest.mark.parametrize("index", range(len(STEP_LENGTHS)))
 def test_anti_normal_costs_more_at_the_normal_optimum(comparisons, index):
-    normal, anti = comparisons[index].normal.gait, comparisons[index].anti_normal
+    normal, anti = comparisons[index].optimum.gait, comparisons[index].other
     assert anti.admissible and anti.arm_amplitude == normal.arm_amplitude
     assert anti.W > normal.W, (anti.W, normal.W)
 
 
 @pytest.mark.parametrize("index", range(len(STEP_LENGTHS)))
 def test_momentum_jump_is_smaller_for_the_normal_gait(comparisons, index):
-    normal, anti = comparisons[index].normal.gait, comparisons[index].anti_normal
+    normal, anti = comparisons[index].optimum.gait, comparisons[index].other
     assert jump(normal) < jump(anti), (jump(normal), jump(anti))
     assert normal.double_support.yaw_momentum_jump == jump(normal)  # the results page uses the same definition

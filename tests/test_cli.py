@@ -45,7 +45,7 @@ def test_plan_and_help_import_only_what_they_use():
 
 
 def test_plan_options_reach_the_core():
-    proc = run("plan", "--step-length", "0.40", "--arm-amplitude", "20", "--mode", "anti-normal",
+    proc = run("plan", "--step-length", "0.40", "--alpha-deg", "20", "--mode", "anti-normal",
                "--params", "aoustin2013-table", "--closure", "slack", "--effort", "l2")
     assert proc.returncode == 0, proc.stderr
     assert "anti-normal, params aoustin2013-table, closure slack, effort l2" in proc.stdout
@@ -58,9 +58,9 @@ def test_plan_options_reach_the_core():
         (["--step-length", "2.0"], "step length must be in (0, 1.814) m"),
         (["--step-length", "nan"], "step length must be a finite number"),
         (["--period", "-0.4"], "period must be positive"),
-        (["--arm-amplitude", "90"], "arm amplitude must be in [0, 90) deg, got 90 deg"),
-        (["--arm-amplitude", "inf"], "arm amplitude must be a finite number"),
-        (["--mode", "hop"], "unknown gait mode 'hop'"),
+        (["--alpha-deg", "90"], "arm amplitude must be in [0, 90) deg, got 90 deg"),
+        (["--alpha-deg", "inf"], "arm amplitude must be a finite number"),
+        (["--mode", "hop"], "argument --mode: invalid choice: 'hop'"),
         (["--params", "no-such-set"], "unknown parameter set 'no-such-set'"),
     ],
 )
@@ -81,7 +81,7 @@ def test_bad_parameter_file(tmp_path):
 
 def test_urdf_command_writes_a_robot(tmp_path):
     out = tmp_path / "biped.urdf"
-    proc = run("urdf", "--output", str(out))
+    proc = run("urdf", "--out", str(out))
     assert proc.returncode == 0
     text = out.read_text()
     for joint in ("right_hip", "left_knee", "torso_yaw", "left_shoulder"):

@@ -4,6 +4,7 @@ and the constants the offline readers use agree with the generated interfaces.""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -21,8 +22,8 @@ from biped_gait.core.gait.views import FIELDS  # noqa: E402
 from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
 from biped_gait.core.walking.walk import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
-from biped_gait.ros.conversions import (  # noqa: E402
-    mode_from_msg, orbit_from_msg, plan_msg, request_from_msg, request_key, urdf_joints)
+from biped_gait.ros.conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, mode_from_msg, orbit_from_msg,  # noqa: E402
+                                        plan_msg, request_from_msg, request_key, urdf_joints)
 
 pytestmark = pytest.mark.ros
 
@@ -83,12 +84,17 @@ def test_a_failed_solve_becomes_nan_and_its_reasons(planner):
     assert not orbit_from_msg(msg).converged
 
 
-def test_requests_take_the_defaults_and_unknown_modes_are_refused():
-    req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL)
+def test_requests_carry_the_vocabulary_without_sentinels_and_unknown_modes_are_refused():
+    req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL,
+                           friction=math.nan, rate_bound=math.inf)
     core = request_from_msg(req, "aoustin2013")
-    assert core == GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013", "theta", "l1")
-    assert request_key(core) == (0.4, 0.5, 0.3, "anti-normal", "aoustin2013", "theta", "l1", None, math.inf, "joint",
-                                 None, math.inf)
+    assert core == dataclasses.replace(GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013"), friction=core.friction)
+    assert math.isnan(core.friction) and core.rate_bound == math.inf
+    # a field left at the message's 0 is a value, not "the default": a frictionless floor, refused
+    assert request_from_msg(PlanGait.Request(), "aoustin2013").friction == 0.0
+    key = request_key(gait_fields(req, "aoustin2013", (*POINT_NAMES, *OPTION_NAMES)))
+    assert key == request_key(gait_fields(req, "aoustin2013", (*POINT_NAMES, *OPTION_NAMES)))  # NaN keys match
+    assert dict(key)["friction"] == "nan" and dict(key)["mode"] == "anti-normal"
     with pytest.raises(ValueError, match="unknown gait mode 7"):
         request_from_msg(PlanGait.Request(mode=7), "aoustin2013")
 
@@ -97,3 +103,36 @@ def test_the_offline_constants_agree_with_the_interfaces():
     assert {kind.name: int(kind) for kind in EventKind} == {
         name: getattr(GaitEvent, name) for name in ("TOUCHDOWN", "FALL", "FINISHED", "NOT_STARTED", "PUSH")}
     assert MODE_CODES == {PlanGait.Request.NORMAL: GaitMode.NORMAL, PlanGait.Request.ANTI_NORMAL: GaitMode.ANTI_NORMAL}
+
+
+def test_the_interfaces_and_the_simulators_parameters_carry_the_gait_vocabulary():
+    """Every option on the service, the action, the recorded call, the echo of the plan and the
+    simulator's parameters, with the vocabulary's default wherever a .srv can hold it."""
+    from biped_gait.gait_options import OPTIONS, POINT
+    from biped_gait.ros.simulator_node import PARAMETERS
+    from biped_gait_interfaces.action import OptimizeArmSwing
+    from biped_gait_interfaces.msg import PlanGaitCall
+
+    request, goal = PlanGait.Request(), OptimizeArmSwing.Goal()
+    fields = set(PlanGait.Request.get_fields_and_field_types())
+    assert {o.name for o in (*POINT, *OPTIONS)} <= fields
+    assert {o.name for o in OPTIONS} | {"step_length", "period", "alpha_min", "alpha_max", "alpha_step"} <= set(
+        OptimizeArmSwing.Goal.get_fields_and_field_types())
+    assert fields <= set(PlanGaitCall.get_fields_and_field_types())  # a recorded call holds every field
+    assert {"min_clearance", "friction_margin", "within_limits", "friction", "rate_bound"} <= set(
+        GaitPlan.get_fields_and_field_types())
+    parameters = {p.name: p for p in PARAMETERS}
+    for option in (*POINT, *OPTIONS):
+        value = option.default
+        if option.name in ("mode", "params"):
+            continue  # a code on the wire; '' there is the planner's default set
+        if isinstance(value, str) or math.isfinite(value):  # a .srv cannot default to NaN or inf
+            assert getattr(request, option.name) == value, option.name
+            if option.name != "arm_amplitude":
+                assert getattr(goal, option.name) == value, option.name
+        assert parameters[option.name].default == value or (math.isnan(value) and math.isnan(parameters[option.name].default))
+        assert parameters[option.name].choices == option.choices
+    assert request.mode == PlanGait.Request.NORMAL and parameters["mode"].default == "normal"
+    assert (goal.alpha_min, goal.alpha_max) == pytest.approx((0.0, math.radians(45.0)), abs=1e-15)
+    assert goal.alpha_step == pytest.approx(math.radians(1.5), abs=1e-15)
+    assert parameters["optimize_arms"].default is False and parameters["arm_amplitude"].low is None  # no sentinel

@@ -17,7 +17,8 @@ distributed = pytest.importorskip("distributed")
 
 # Volatile figures: wall time of each solve.
 VOLATILE = {"solve_time_s"}
-SWEEP = ["sweep", "--step-length", "0.40", "0.45", "--period", "0.45", "1.5", "--alpha-deg", "0", "15", "30"]
+SWEEP = ["sweep", "--step-length", "0.40", "0.45", "--period", "0.45", "1.5", "--alpha-deg", "0", "15", "30", "--mode",
+         "normal", "anti-normal"]
 
 
 @pytest.fixture(scope="module")

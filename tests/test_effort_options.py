@@ -47,6 +47,6 @@ def test_a_joint_rate_bound_is_respected_and_costs_effort(planner, default_gait)
 def test_the_absolute_reading_gives_the_papers_optimal_amplitudes(length, paper):
     comparison = compare_modes(load_params(), length, 0.45,
                                options={"effort_coordinates": "absolute", "friction": math.inf})
-    assert comparison.normal.interior
-    assert abs(math.degrees(comparison.normal.alpha) - paper) < 1.0
-    assert comparison.anti_normal.W > comparison.normal.W
+    assert comparison.optimum.interior
+    assert abs(math.degrees(comparison.optimum.alpha) - paper) < 1.0
+    assert comparison.other.W > comparison.optimum.W

@@ -169,7 +169,7 @@ def test_mujoco_follows_the_plan(params, alpha):
 def test_cli_writes_an_mjcf_mujoco_loads(tmp_path):
     out = tmp_path / "biped.xml"
     proc = subprocess.run([sys.executable, "-m", "biped_gait.cli", "mjcf", "--params", "aoustin2013-hips",
-                           "--output", str(out)], capture_output=True, text=True, timeout=120)
+                           "--out", str(out)], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     model = mujoco.MjModel.from_xml_path(str(out))
     assert model.nu == 11 and model.nv == 17

@@ -30,7 +30,7 @@ from rclpy.qos import QoSProfile
 from sensor_msgs.msg import JointState
 
 from biped_gait.recording.recover import is_complete
-from biped_gait.ros.client import ClientSide
+from biped_gait.ros.client import ClientSide, optimize_goal, plan_request
 from biped_gait.ros.qos import LATCHED
 from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitEvent, GaitPlan
@@ -122,9 +122,9 @@ def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
             assert action.wait_for_server(timeout_sec=30.0)
             clients.append((client, action))
         for client, action in clients:
-            action.send_goal_async(OptimizeArmSwing.Goal(step_length=0.45, period=0.45, alpha_min=0.0, alpha_max=0.78))
+            action.send_goal_async(optimize_goal(step_length=0.45, period=0.45, alpha_min=0.0, alpha_max=0.78))
             for k in range(30):
-                client.call_async(PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.2 + 0.01 * k))
+                client.call_async(plan_request(step_length=0.45, period=0.45, arm_amplitude=0.2 + 0.01 * k))
         settle = time.monotonic() + 0.5  # the requests reach the nodes, which start solving
         side.wait(lambda: time.monotonic() > settle)
         for where, (_, proc) in rounds:
@@ -171,9 +171,9 @@ def test_a_burst_of_800_requests_is_all_answered(planner, side):
     clients = [side.node.create_client(PlanGait, service, qos_profile=QoSProfile(depth=1000)) for _ in range(8)]
     for client in clients:
         side.connect(client)
-    good = PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.41)
+    good = plan_request(step_length=0.45, period=0.45, arm_amplitude=0.41)
     assert side.call(clients[0], good).success  # solved once: the burst is answered from the cache
-    bad = PlanGait.Request(step_length=math.nan, period=0.45, arm_amplitude=0.41)
+    bad = plan_request(step_length=math.nan, period=0.45, arm_amplitude=0.41)
     started = time.monotonic()
     futures = [c.call_async(bad if k % 10 == 9 else good) for k in range(100) for c in clients]
     try:
@@ -191,9 +191,9 @@ def test_a_burst_of_800_requests_is_all_answered(planner, side):
 def test_nan_goals_are_aborted_with_a_reason(planner, side):
     action = ActionClient(side.node, OptimizeArmSwing, f"/{planner}/optimize_arm_swing")
     assert action.wait_for_server(timeout_sec=30.0)
-    for goal, reason in [(OptimizeArmSwing.Goal(step_length=math.nan, period=0.45, alpha_max=0.7), "step_length"),
-                         (OptimizeArmSwing.Goal(step_length=0.45, period=0.45, alpha_max=math.inf), "alpha_max"),
-                         (OptimizeArmSwing.Goal(step_length=0.45, period=0.45, alpha_min=0.5, alpha_max=0.2), "range")]:
+    for goal, reason in [(optimize_goal(step_length=math.nan, period=0.45, alpha_max=0.7), "step_length"),
+                         (optimize_goal(step_length=0.45, period=0.45, alpha_max=math.inf), "alpha_max"),
+                         (optimize_goal(step_length=0.45, period=0.45, alpha_min=0.5, alpha_max=0.2), "range")]:
         sent = action.send_goal_async(goal)
         side.wait(sent.done)
         result = sent.result().get_result_async()
@@ -209,7 +209,7 @@ def test_a_100_kb_string_is_clipped_in_the_log(tmp_path, side):
     try:
         client = side.node.create_client(PlanGait, f"/{name}/plan_gait")
         side.connect(client)
-        response = side.call(client, PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.4,
+        response = side.call(client, plan_request(step_length=0.45, period=0.45, arm_amplitude=0.4,
                                                       params="x" * 100_000))
         assert not response.success and len(response.message) < 1000
     finally:
@@ -255,7 +255,7 @@ def test_a_full_disk_leaves_the_planner_serving(side, tmp_path):
         try:
             client = side.node.create_client(PlanGait, f"/{name}/plan_gait")
             side.connect(client)
-            answers = [side.call(client, PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.2 + 0.002 * k))
+            answers = [side.call(client, plan_request(step_length=0.45, period=0.45, arm_amplitude=0.2 + 0.002 * k))
                        for k in range(40)]  # ~30 kB recorded per call
             assert all(a.success for a in answers)
         finally:
@@ -275,7 +275,7 @@ def test_an_unwritable_record_dir(planner, side, tmp_path):
     try:
         client = side.node.create_client(PlanGait, f"/{name}/plan_gait")
         side.connect(client)
-        assert side.call(client, PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.41)).success
+        assert side.call(client, plan_request(step_length=0.45, period=0.45, arm_amplitude=0.41)).success
     finally:
         assert stop_node(proc) == 0
     log = log_of(tmp_path, "biped-gait-planner")

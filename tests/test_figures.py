@@ -65,7 +65,7 @@ def test_a_period_sweep_draws_w_against_t_with_the_marks_in_the_legend(tmp_path,
     results[1] = dataclasses.replace(results[1], verdict=dataclasses.replace(results[1].verdict, admissible=False,
                                                                               reasons=("made up",)))
     paths = sweep_figures(results, tmp_path)
-    assert [p.name for p in paths] == ["W_vs_T_L0.450_alpha23.50.png"]
+    assert [p.name for p in paths] == ["W_vs_T_L0.450.png"]
     fig = period_figure(results)
     ax = fig.axes[0]
     assert ax.get_xlabel() == "step period T (s)" and np.allclose(ax.lines[0].get_xdata(), [0.44, 0.45, 0.46])

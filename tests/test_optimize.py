@@ -69,9 +69,9 @@ def test_table_inertia_gives_an_end_point_not_an_optimum():
 
 def test_mode_comparison_solves_the_anti_normal_gait_at_the_normal_optimum(optimum):
     comparison = compare_modes(load_params(), 0.45, 0.45, coarse_step=COARSE)
-    assert comparison.normal.alpha == pytest.approx(optimum.alpha, abs=DEFAULTS.arm_tolerance)
-    anti = comparison.anti_normal
-    assert anti.mode == "anti-normal" and anti.arm_amplitude == comparison.normal.alpha
+    assert comparison.optimum.alpha == pytest.approx(optimum.alpha, abs=DEFAULTS.arm_tolerance)
+    anti = comparison.other
+    assert anti.mode == "anti-normal" and anti.arm_amplitude == comparison.optimum.alpha
     assert anti.admissible and anti.figures.samples is not None
 
 

@@ -20,7 +20,7 @@ from rosbags.highlevel import AnyReader
 
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.ros.conversions import urdf_joints
-from biped_gait.ros.client import ClientSide
+from biped_gait.ros.client import ClientSide, optimize_goal, plan_request
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
@@ -30,10 +30,6 @@ pytestmark = pytest.mark.ros
 
 SERVICE = "/biped_gait_planner/plan_gait"
 TOPIC = "/biped_gait_planner/gait_plan"
-
-
-def plan_request(step_length=0.45, period=0.45, arm_amplitude=math.radians(23.5), mode=PlanGait.Request.NORMAL, **kw):
-    return PlanGait.Request(step_length=step_length, period=period, arm_amplitude=arm_amplitude, mode=mode, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -236,8 +232,7 @@ def send_goal(ros, client, **goal):
     from biped_gait_interfaces.action import OptimizeArmSwing
 
     feedback = []
-    request = OptimizeArmSwing.Goal(step_length=0.45, period=0.45, mode=PlanGait.Request.NORMAL,
-                                    alpha_min=0.0, alpha_max=math.radians(45.0), **goal)
+    request = optimize_goal(**goal)
     sent = client.send_goal_async(request, feedback_callback=lambda m: feedback.append(m.feedback))
     ros.wait(sent.done, 30.0)
     handle = sent.result()
@@ -280,7 +275,7 @@ def test_the_action_reports_progress_and_finds_the_optimum(ros, action_client, p
 def test_the_action_can_be_canceled(ros, action_client):
     from action_msgs.msg import GoalStatus
 
-    handle, feedback = send_goal(ros, action_client)
+    handle, feedback = send_goal(ros, action_client, period=0.46)  # not the cached goal of the test before
     ros.wait(lambda: len(feedback) >= 3, 60.0)
     cancel = handle.cancel_goal_async()
     ros.wait(cancel.done, 30.0)
@@ -315,3 +310,120 @@ def test_a_plan_without_its_trajectory_is_the_same_plan(ros):
     assert list(compact.plan.trajectory.joint_names) == list(full.plan.trajectory.joint_names)
     for name in ("effort_cost", "theta", "q0", "qd_a", "joint_roles"):
         assert np.array_equal(getattr(compact.plan, name), getattr(full.plan, name)), name
+
+
+def test_friction_nan_is_the_sets_zero_a_frictionless_floor_and_inf_no_cone(ros, planner, default_gait):
+    nan = ros.call(ros.client, plan_request(friction=math.nan))
+    assert nan.success and nan.plan.friction == planner.params.friction == 0.5
+    assert nan.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
+    zero = ros.call(ros.client, plan_request(friction=0.0))
+    assert not zero.success and "frictionless floor, on which no gait walks" in zero.message
+    free = ros.call(ros.client, plan_request(friction=math.inf))
+    expected = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal", friction=math.inf))
+    assert free.success and math.isinf(free.plan.friction)
+    assert free.plan.effort_cost == pytest.approx(expected.W, rel=1e-12) and expected.W < default_gait.W
+    unbounded = ros.call(ros.client, plan_request(rate_bound=0.0))
+    assert not unbounded.success and "joint-rate bound must be positive (or inf)" in unbounded.message
+
+
+def test_a_gait_that_misses_only_the_margins_says_so_on_the_wire(ros, default_gait):
+    response = ros.call(ros.client, plan_request(min_clearance=0.005))
+    assert not response.success and response.plan.within_limits and not response.plan.admissible
+    assert response.message.startswith("not admissible: meets the limits but not the margins: swing clearance")
+    assert "nearest within the margins (atlas grid)" in response.message
+    assert response.plan.min_clearance == 0.005 and response.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
+    margin = ros.call(ros.client, plan_request(friction_margin=0.1))
+    assert margin.plan.friction_margin == 0.1 and max(margin.plan.impulse_friction_ratios) <= 0.4 + 1e-9
+
+
+def test_the_action_takes_the_gait_options_and_answers_again_from_its_cache(ros, action_client, planner):
+    from action_msgs.msg import GoalStatus
+
+    from biped_gait.studies.optimize import optimal_arm_amplitude
+
+    goal = {"friction": math.inf, "alpha_min": math.radians(20.0), "alpha_max": math.radians(35.0)}
+    results = []
+    for _ in range(2):
+        handle, feedback = send_goal(ros, action_client, **goal)
+        future = handle.get_result_async()
+        ros.wait(future.done, 120.0)
+        assert future.result().status == GoalStatus.STATUS_SUCCEEDED
+        results.append((future.result().result, feedback))
+    (first, fed), (again, fed_again) = results
+    expected = optimal_arm_amplitude(planner, 0.45, 0.45, "normal", (goal["alpha_min"], goal["alpha_max"]),
+                                     options={"friction": math.inf})
+    assert first.alpha_opt == pytest.approx(expected.alpha, abs=1e-9) and math.degrees(first.alpha_opt) > 26.0  # no cone
+    assert again.message == first.message + " (cached)" and again.alpha_opt == first.alpha_opt
+    assert list(again.alphas) == list(first.alphas) and fed and not fed_again  # answered at once, no solve
+
+
+def test_diagnostics_count_the_requests(ros):
+    from diagnostic_msgs.msg import DiagnosticArray
+
+    for request in (plan_request(arm_amplitude=0.2345), plan_request(arm_amplitude=0.2345), plan_request(period=-1.0)):
+        ros.call(ros.client, request)
+    received = []
+
+    def planning() -> dict[str, str]:
+        statuses = [s for a in received for s in a.status if s.name == "biped_gait_planner: planning"]
+        return {kv.key: kv.value for kv in statuses[-1].values} if statuses else {}
+
+    sub = ros.node.create_subscription(DiagnosticArray, "/diagnostics", received.append, 10)
+    ros.wait(lambda: int(planning().get("requests", 0)) >= 3, 15.0)  # a report after the calls (one a second)
+    values = planning()
+    [status] = [s for s in received[-1].status if s.name == "biped_gait_planner: planning"]
+    assert status.level == status.OK and status.hardware_id == "/biped_gait_planner"
+    assert int(values["requests"]) >= int(values["solves"]) + int(values["cache_hits"]) >= 2
+    assert int(values["cache_hits"]) >= 1 and int(values["refusals"]) >= 1 and float(values["median_ms"]) > 0
+    assert values["recording"].endswith(".mcap") and f"{values['requests']} requests" in status.message
+    ros.node.destroy_subscription(sub)
+
+
+def test_run_time_parameters_are_applied_and_the_others_refused_with_a_reason(tmp_path):
+    """A planner of its own: cache_size and record set through the parameter services (the
+    recording finished, then a new one), a read-only parameter refused, and how each is described."""
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import DescribeParameters, SetParameters
+
+    name = "parameters_test_planner"
+    proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", f"record_dir:={tmp_path / 'bags'}", cwd=tmp_path)
+    side = ClientSide("parameters_test_client")
+
+    def value(kind, **field):
+        return ParameterValue(type=kind, **field)
+
+    try:
+        setter = side.node.create_client(SetParameters, f"/{name}/set_parameters")
+        describe = side.node.create_client(DescribeParameters, f"/{name}/describe_parameters")
+        planner = side.node.create_client(PlanGait, f"/{name}/plan_gait")
+        for client in (setter, describe, planner):
+            side.connect(client)
+
+        def set_(parameter: str, new: ParameterValue):
+            return side.call(setter, SetParameters.Request(parameters=[ParameterMsg(name=parameter, value=new)])).results[0]
+
+        described = side.call(describe, DescribeParameters.Request(names=["cache_size", "record", "record_dir"]))
+        assert [d.read_only for d in described.descriptors] == [False, False, True]
+        assert side.call(planner, plan_request(arm_amplitude=0.3)).success
+        assert set_("cache_size", value(ParameterType.PARAMETER_INTEGER, integer_value=0)).successful
+        again = side.call(planner, plan_request(arm_amplitude=0.3))
+        assert again.success and not again.message.endswith("(cached)")  # the cache holds nothing now
+        refused = set_("record_dir", value(ParameterType.PARAMETER_STRING, string_value="elsewhere"))
+        assert not refused.successful and "read-only" in refused.reason and "record_dir" in refused.reason
+        out_of_range = set_("cache_size", value(ParameterType.PARAMETER_INTEGER, integer_value=-5))
+        assert not out_of_range.successful and out_of_range.reason
+        assert set_("record", value(ParameterType.PARAMETER_BOOL, bool_value=False)).successful
+        [first] = list((tmp_path / "bags").iterdir())
+        with AnyReader([first]) as reader:  # finished when record went off: readable while the node runs
+            assert sum(c.msgcount for c in reader.connections) == 4  # two calls, two plans
+        side.call(planner, plan_request(arm_amplitude=0.31))  # not recorded
+        assert set_("record", value(ParameterType.PARAMETER_BOOL, bool_value=True)).successful
+        side.call(planner, plan_request(arm_amplitude=0.32))
+    finally:
+        side.close()
+        assert stop_node(proc) == 0, (tmp_path / "biped-gait-planner.log").read_text()
+    second = [d for d in (tmp_path / "bags").iterdir() if d != first]
+    assert len(second) == 1
+    with AnyReader(second) as reader:
+        calls = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages() if c.topic.endswith("/calls")]
+    assert [c.arm_amplitude for c in calls] == [0.32]

@@ -33,7 +33,7 @@ from std_msgs.msg import String, UInt64
 from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
-from biped_gait.ros.client import ClientSide
+from biped_gait.ros.client import ClientSide, plan_request
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 from biped_gait_interfaces.srv import PlanGait
 
@@ -99,7 +99,7 @@ def test_clock_tf_and_the_recording_as_users_expect(planner_node, side, tmp_path
     # the planner on simulated time stamps its plans with it
     client = side.node.create_client(PlanGait, f"/{PLANNER}/plan_gait")
     side.connect(client)
-    plan = side.call(client, PlanGait.Request(step_length=0.45, period=0.45, arm_amplitude=0.41)).plan
+    plan = side.call(client, plan_request(step_length=0.45, period=0.45, arm_amplitude=0.41)).plan
     assert 0 < ns(plan.header.stamp) < 10e9
     # /tf received live is what was recorded, message for message
     [bag] = list((tmp_path / "bags").iterdir())
@@ -201,3 +201,52 @@ async def foxglove_client(port: int) -> tuple[dict[str, dict], dict[str, list[by
                 _, subscription, _ = struct.unpack_from("<BIQ", message)
                 received.setdefault(topics[subscription], []).append(message[13:])
         return channels, received
+
+
+def test_live_view_and_recording_switched_at_run_time_and_the_walk_in_diagnostics(planner_node, side, tmp_path):
+    """The parameter services of a walking simulator: the live view started (the robot description
+    sent to a client that connects now) and stopped; a recording started (the latched topics first)
+    and finished; a read-only parameter refused with its reason; /diagnostics tells the walk."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "record:=false", "live_view_port:=0")
+    log = tmp_path / "biped-gait-simulator.log"
+    received = []
+    side.node.create_subscription(DiagnosticArray, "/diagnostics", received.append, 10)
+
+    def walk() -> dict[str, str]:
+        statuses = [s for a in received for s in a.status if s.name == "biped_gait_simulator: walk"]
+        return {kv.key: kv.value for kv in statuses[-1].values} if statuses else {}
+
+    def set_(name: str, value: bool | int):
+        kind = (ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=value) if isinstance(value, bool) else
+                ParameterValue(type=ParameterType.PARAMETER_INTEGER, integer_value=value))
+        request = SetParameters.Request(parameters=[ParameterMsg(name=name, value=kind)])
+        return side.call(setter, request, timeout=30.0).results[0]
+
+    try:
+        setter = side.node.create_client(SetParameters, "/biped_gait_simulator/set_parameters")
+        side.connect(setter)
+        side.wait(lambda: walk().get("state") == "walking" and int(walk().get("touchdowns", 0)) >= 1, 60.0)
+        assert walk()["recording"] == "off" and walk()["live_view"] == "off"
+        assert set_("live_view", True).successful
+        side.wait(lambda: re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text()) is not None, 10.0)
+        port = int(re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text()).group(1))
+        channels, shown = asyncio.run(foxglove_client(port))
+        assert "<robot" in deserialize_message(shown["/robot_description"][0], String).data
+        assert set_("live_view", False).successful and "live view stopped" in log.read_text()
+        assert set_("record", True).successful
+        side.wait(lambda: walk().get("recording", "off") != "off", 10.0)
+        time.sleep(1.0)  # a second of the walk recorded
+        assert set_("record", False).successful
+        refused = set_("steps", 3)
+        assert not refused.successful and "read-only" in refused.reason and "steps" in refused.reason
+    finally:
+        assert stop_node(proc) == 0, log.read_text()
+    [bag] = list((tmp_path / "bags").iterdir())
+    with AnyReader([bag]) as reader:
+        counts = {c.topic: c.msgcount for c in reader.connections}
+    assert counts["/robot_description"] == 1 and counts["/tf_static"] == 1  # the latched topics first
+    assert counts["/joint_states"] >= 400  # 500 Hz of simulated time, paced at real time, for about a second

@@ -22,7 +22,8 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 def test_sweep_writes_csv_json_and_figures(tmp_path):
     out = tmp_path / "out"
-    proc = run("sweep", "--step-length", "0.40", "0.45", "--alpha-deg", "0", "20", "--out", str(out), "--workers", "2")
+    proc = run("sweep", "--step-length", "0.40", "0.45", "--alpha-deg", "0", "20", "--mode", "normal", "anti-normal",
+               "--out", str(out), "--workers", "2")
     assert proc.returncode == 0, proc.stderr
     assert f"8 gaits (8 converged, 8 admissible) written to {out}/sweep.csv" in proc.stdout
     rows = list(csv.DictReader((out / "sweep.csv").open()))
@@ -41,13 +42,17 @@ def test_sweep_writes_csv_json_and_figures(tmp_path):
         (["sweep", "--alpha-deg"], "argument --alpha-deg: expected at least one argument"),
         (["sweep", "--mode"], "argument --mode: expected at least one argument"),
         (["sweep", "--alpha-deg-range", "0", "45", "0.01"],
-         "the sweep has 9002 cases (more than 2000): confirm to run it (--yes)"),
-        (["sweep", "--mode", "normal", "sideways"], "unknown gait mode 'sideways'"),
+         "the sweep has 4501 cases (more than 2000): confirm to run it (--yes)"),
+        (["sweep", "--mode", "normal", "sideways"], "argument --mode: invalid choice: 'sideways'"),
         (["sweep", "--period", "0"], "period must be positive"),
         (["sweep", "--workers", "0"], "the number of workers must be at least 1, got 0"),
         (["sweep", "--step-length", "0.45", "--step-length-range", "0.4", "0.5", "0.05"], "not allowed with argument"),
-        (["optimize-arms", "--alpha-range", "30", "10"], "arm amplitude range is empty or inverted: [30, 10] deg"),
-        (["optimize-arms", "--mode", "hop"], "unknown gait mode 'hop'"),
+        (["optimize-arms", "--alpha-deg-range", "30", "10", "1.5"], "arm amplitude range is empty or inverted: [30, 10] deg"),
+        (["optimize-arms", "--alpha-deg-range", "0", "45", "0"], "arm amplitude range step must be positive, got 0"),
+        (["optimize-arms", "--friction-margin", "0.6"], "friction margin must be in [0, 0.5)"),
+        (["plan", "--friction", "0"], "friction coefficient 0 is a frictionless floor"),
+        (["plan", "--min-clearance", "-0.001"], "swing clearance margin must be 0 (none) or positive"),
+        (["optimize-arms", "--mode", "hop"], "argument --mode: invalid choice: 'hop'"),
         (["figure", "fig6"], "argument name: invalid choice: 'fig6'"),
         (["plan", "--step-length", "abc"], "argument --step-length: invalid float value: 'abc'"),
     ],
@@ -66,7 +71,7 @@ def test_interrupted_sweep_keeps_what_it_computed(tmp_path):
     """Ctrl-C reaches the whole process group (the command and its workers), as in a terminal."""
     out = tmp_path / "out"
     args = ["sweep", "--step-length-range", "0.30", "0.56", "0.02", "--alpha-deg-range", "0", "45", "2.5",
-            "--out", str(out), "--workers", "2"]
+            "--mode", "normal", "anti-normal", "--out", str(out), "--workers", "2"]
     proc = subprocess.Popen([ENTRY, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
@@ -94,7 +99,7 @@ def test_interrupted_sweep_keeps_what_it_computed(tmp_path):
 
 
 def test_optimize_arms_reports_an_interior_optimum():
-    proc = run("optimize-arms", "--alpha-step", "5")
+    proc = run("optimize-arms", "--alpha-deg-range", "0", "45", "5")
     assert proc.returncode == 0, proc.stderr
     assert re.match(r"optimal arm amplitude alpha\* = 2\d\.\d{3} deg \(normal gait, L = 0.45 m, T = 0.45 s, "
                     r"params aoustin2013\): W = \d+\.\d{4} N m s", proc.stdout), proc.stdout
@@ -102,19 +107,20 @@ def test_optimize_arms_reports_an_interior_optimum():
 
 
 def test_optimize_arms_says_when_there_is_no_interior_minimum():
-    proc = run("optimize-arms", "--params", "aoustin2013-table", "--alpha-step", "5")
+    proc = run("optimize-arms", "--params", "aoustin2013-table", "--alpha-deg-range", "0", "45", "5")
     assert proc.returncode == 0, proc.stderr
     assert "W(alpha) has no interior minimum on [0, 45] deg" in proc.stdout
     assert "end point alpha = 0.000 deg" in proc.stdout and "This is not an optimum." in proc.stdout
 
 
 def test_optimize_arms_without_any_admissible_gait_exits_1():
-    proc = run("optimize-arms", "--period", "1.5", "--alpha-step", "15")
+    proc = run("optimize-arms", "--period", "1.5", "--alpha-deg-range", "0", "45", "15")
     assert proc.returncode == 1
     assert proc.stderr.startswith("biped-gait: no admissible normal gait at L = 0.45 m, T = 1.5 s")
 
 
-@pytest.mark.parametrize("name, options", [("fig4", ["--alpha-step", "7.5"]), ("fig5", ["--alpha-step", "5"])])
+@pytest.mark.parametrize("name, options", [("fig4", ["--alpha-deg-range", "0", "45", "7.5"]),
+                                           ("fig5", ["--alpha-deg-range", "0", "45", "5"])])
 def test_figure_commands_write_png(tmp_path, name, options):
     out = tmp_path / "docs" / f"{name}.png"
     proc = run("figure", name, "--out", str(out), "--workers", "2", *options)
@@ -146,3 +152,36 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
+
+
+@pytest.mark.parametrize("options, alpha, effort", [
+    ([], 23.66, 32.78),  # the friction cone of the parameter set, mu = 0.5
+    (["--friction", "inf"], 27.04, 31.24),  # no cone: the paper's LP
+    (["--effort-coordinates", "absolute"], 19.53, 59.72),  # the absolute reading, with the cone
+    (["--effort-coordinates", "absolute", "--friction", "inf"], 23.89, 56.31),  # the absolute reading, no cone
+])
+def test_optimize_arms_reproduces_the_results_pages_optima(options, alpha, effort):
+    """The rows of docs/results.md's table at L = T = 0.45 (two decimals there), from the CLI."""
+    proc = run("optimize-arms", *options, "--json", "-")
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout)
+    assert result["interior"] and result["where"] == "interior minimum"
+    assert result["alpha_deg"] == pytest.approx(alpha, abs=0.006) and result["W"] == pytest.approx(effort, abs=0.006)
+    assert result["gait"]["friction"] == (None if "inf" in options else 0.5)  # inf is null in JSON
+    assert "optimal arm amplitude alpha*" in proc.stderr  # the text goes to stderr with --json -
+
+
+def test_every_gait_verb_writes_its_json(tmp_path):
+    out = tmp_path / "plan"
+    proc = run("plan", "--min-clearance", "0.005", "--out", str(out), "--json", str(tmp_path / "plan.json"))
+    assert proc.returncode == 1, proc.stderr  # it meets the limits, not the margin
+    assert "not admissible: meets the limits but not the margins: swing clearance" in proc.stdout
+    document = json.loads((tmp_path / "plan.json").read_text())
+    assert document == json.loads((out / "plan.json").read_text())
+    assert document["within_limits"] is True and document["admissible"] is False and document["min_clearance"] == 0.005
+    assert (out / "plan.png").read_bytes()[:8] == PNG_SIGNATURE
+    figure = run("figure", "fig5", "--alpha-deg-range", "0", "45", "5", "--out", str(tmp_path / "fig5.png"),
+                 "--workers", "1", "--json", "-")
+    assert figure.returncode == 0, figure.stderr
+    momentum = json.loads(figure.stdout)["momentum"]
+    assert set(momentum) == {"normal", "anti-normal"} and len(momentum["normal"]["t"]) == len(momentum["normal"]["h_vertical"])

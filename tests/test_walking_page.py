@@ -38,7 +38,7 @@ def test_the_push_study_command_writes_its_files(tmp_path):
 
 @pytest.mark.parametrize("args, message", [
     (["--phase", "1.5"], "--phase must be in [0, 1)"),
-    (["--directions", "up"], "unknown push direction 'up'"),
+    (["--directions", "up"], "argument --directions: invalid choice: 'up'"),
     (["--momentum-rate", "1.0"], "--momentum-rate must be below 1"),
 ])
 def test_the_push_study_refuses_bad_input_in_one_line(tmp_path, capsys, args, message):

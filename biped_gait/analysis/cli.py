@@ -46,7 +46,7 @@ def analyze(bag: Bag, out_dir: Path) -> dict:
     return summary
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog=PROGRAM, description="Summarize and plot a recording of biped_gait (walk or planner).")
     parser.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 directory or .mcap file")
     parser.add_argument("--out", type=Path, help="output directory (default: <bag directory>/analysis)")
@@ -55,7 +55,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point ``biped-gait-analyze``; returns the exit status (2: bad recording)."""
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     try:
         bag = open_bag(args.bag)
         out_dir = args.out or bag.directory / "analysis"

@@ -61,7 +61,9 @@ def _momentum_figure(fig, walk: Walk) -> None:
 
 
 def _top_view_figure(fig, walk: Walk) -> None:
-    """The centre of mass's path and the stance feet, x-y plane of the world (m)."""
+    """The centre of mass's path and the stance feet, x-y plane of the world (m); the y axis
+    spans the data (a walk is metres long and centimetres wide: at equal scales its sway would
+    be a flat line), as its label says."""
     ax = fig.add_subplot()
     com = np.array(walk.com)
     ax.plot(com[:, 0], com[:, 1], color="C0", label="centre of mass")
@@ -73,12 +75,14 @@ def _top_view_figure(fig, walk: Walk) -> None:
                     linestyle="none", label=f"{side} stance foot")
         for step, foot in feet.items():
             ax.annotate(f"step {step}", foot[:2], textcoords="offset points", xytext=(4, 4), fontsize="small")
-    ax.set_aspect("equal", adjustable="datalim")
+    ys = np.concatenate([com[:, 1], [foot[1] for _, _, foot in starts.values()]])
+    pad = 0.15 * float(np.ptp(ys)) + 0.01
+    ax.set_ylim(float(ys.min()) - pad, float(ys.max()) + pad)
     ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
+    ax.set_ylabel("y (m, scale stretched)")
     ax.set_title("Centre of mass and stance feet, seen from above")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
+    fig.legend(fontsize="small", loc="outside lower center", ncols=3)  # below: the feet's labels fill the plot
 
 
 def write_plots(walk: Walk, out_dir: Path) -> list[Path]:

@@ -1,8 +1,12 @@
 """A client side for scripts, tests and benchmarks: an rclpy context, node and executor of its
-own in the calling process, with helpers to wait, connect to a service and call it.
+own in the calling process, with helpers to wait, connect to a service and call it, and the
+planner's requests and goals built from the gait vocabulary's defaults.
 
 Waits spin the executor with ``spin_once`` in a loop (faster than
-``spin_until_future_complete`` for a client, and never stuck on a signal).
+``spin_until_future_complete`` for a client, and never stuck on a signal). A message's fields
+start at 0, and a .srv cannot give NaN or inf as a default: ``plan_request`` and
+``optimize_goal`` start from the vocabulary's (friction NaN: the parameter set's; rate_bound
+inf: none), so that a client sets only what it means.
 """
 
 from __future__ import annotations
@@ -14,6 +18,26 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
+
+from biped_gait_interfaces.action import OptimizeArmSwing
+from biped_gait_interfaces.srv import PlanGait
+
+from ..gait_options import OPTIONS, POINT
+
+# The vocabulary's defaults a message can hold as they are (the mode is a code, params '' the node's).
+_DEFAULTS = {option.name: option.default for option in (*POINT, *OPTIONS) if option.name not in ("mode", "params")}
+
+
+def plan_request(**fields) -> PlanGait.Request:
+    """A ``PlanGait`` request: the gait vocabulary's defaults, ``fields`` (SI, radians) over them."""
+    return PlanGait.Request(**{**_DEFAULTS, **fields})
+
+
+def optimize_goal(**fields) -> OptimizeArmSwing.Goal:
+    """An ``OptimizeArmSwing`` goal: the vocabulary's defaults (no amplitude: the goal searches a
+    range, default the paper's), ``fields`` over them."""
+    defaults = {name: value for name, value in _DEFAULTS.items() if name != "arm_amplitude"}
+    return OptimizeArmSwing.Goal(**{**defaults, **fields})
 
 
 class ClientSide:

@@ -6,6 +6,7 @@ radians). The gait mode is parsed here, at the edge, from the messages' codes.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Duration
@@ -16,6 +17,7 @@ from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.gait.configurations import GaitMode
+from ..gait_options import OPTIONS, POINT
 from ..core.gait.gait import Gait, Stride
 from ..core.gait.views import FIELDS
 from ..core.dynamics.impulses import EffortOptions
@@ -26,6 +28,8 @@ from ..core.walking.walk import PlannedOrbit
 from ..recording.topics import MODE_CODES
 
 MODE_TO_MSG = {mode: code for code, mode in MODE_CODES.items()}
+POINT_NAMES = tuple(option.name for option in POINT)
+OPTION_NAMES = tuple(option.name for option in OPTIONS)
 PLAN_STANCE_SIDE = "right"  # a plan's step stands on the model's leg 1, the right foot
 
 
@@ -37,31 +41,25 @@ def mode_from_msg(code: int) -> GaitMode:
         raise ValueError(f"unknown gait mode {code}: use NORMAL (0) or ANTI_NORMAL (1)") from None
 
 
+def gait_fields(msg, default_params: str, names: Sequence[str] = OPTION_NAMES) -> dict[str, object]:
+    """The gait vocabulary's fields ``names`` of a request or goal ``msg`` (same names, same
+    units) as ``GaitRequest`` fields: the mode parsed from its code, an empty ``params`` the
+    node's ``default_params``; no other value is replaced (NaN friction is the core's)."""
+    fields = {name: getattr(msg, name) for name in names}
+    fields["mode"] = mode_from_msg(msg.mode)
+    fields["params"] = msg.params or default_params
+    return fields
+
+
 def request_from_msg(req: PlanGait.Request, default_params: str) -> GaitRequest:
-    """The core's GaitRequest for a service request (empty strings and zeros take the defaults:
-    the parameter set's friction, no joint-rate bound, the joint reading of the effort, the hips'
-    spacing as the step width (also for NaN))."""
-    return GaitRequest(
-        step_length=req.step_length,
-        period=req.period,
-        arm_amplitude=req.arm_amplitude,
-        mode=mode_from_msg(req.mode),
-        params=req.params or default_params,
-        closure=req.closure or "theta",
-        effort=req.effort or "l1",
-        friction=req.friction or None,
-        rate_bound=req.rate_bound or math.inf,
-        effort_coordinates=req.effort_coordinates or "joint",
-        step_width=None if req.step_width == 0 or math.isnan(req.step_width) else req.step_width,
-        turn_radius=math.inf if req.turn_radius == 0 or math.isnan(req.turn_radius) else req.turn_radius,
-    )
+    """The core's GaitRequest for a service request."""
+    return GaitRequest(**gait_fields(req, default_params, (*POINT_NAMES, *OPTION_NAMES)))
 
 
-def request_key(request: GaitRequest) -> tuple:
-    """Hashable identity of a request, for the planner's cache."""
-    return (request.step_length, request.period, request.arm_amplitude, request.mode.value, request.params,
-            request.closure, request.effort, request.friction, request.rate_bound, request.effort_coordinates,
-            request.step_width, request.turn_radius)
+def request_key(fields: dict[str, object]) -> tuple:
+    """Hashable identity of request fields, for the planner's caches (NaN equal to NaN)."""
+    return tuple((name, "nan" if isinstance(value, float) and math.isnan(value) else
+                  value.value if isinstance(value, GaitMode) else value) for name, value in sorted(fields.items()))
 
 
 def duration_msg(seconds: float) -> Duration:
@@ -137,6 +135,6 @@ def orbit_from_msg(msg: GaitPlan) -> PlannedOrbit:
         mode=mode_from_msg(msg.mode), effort=msg.effort, q0=np.array(msg.q0), q_t=np.array(msg.q_t),
         qd_a=np.array(msg.qd_a), qd_b=np.array(msg.qd_b), converged=msg.converged, admissible=msg.admissible,
         reasons=tuple(msg.reasons),
-        options=EffortOptions(msg.friction, msg.rate_bound, msg.effort_coordinates or "joint"),
+        options=EffortOptions(msg.friction - msg.friction_margin, msg.rate_bound, msg.effort_coordinates or "joint"),
         foot_line_moment=msg.foot_line_moment, theta=msg.theta, turn_radius=msg.turn_radius,
     )

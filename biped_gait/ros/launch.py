@@ -30,7 +30,7 @@ from .parameters import check_parameters_file
 PLANNER, SIMULATOR = "biped-gait-planner", "biped-gait-simulator"
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="biped-gait-launch", description=__doc__.splitlines()[0])
     parser.add_argument("--config", type=Path, help="ROS 2 parameters file with biped_gait_planner and "
                         "biped_gait_simulator sections (default: the nodes' own defaults)")
@@ -76,7 +76,7 @@ def stop_process(proc: subprocess.Popen, sig: int = signal.SIGINT, timeout: floa
 
 def main(argv: list[str] | None = None) -> int:
     """Run the two nodes; returns the exit status (non-zero if one of them failed)."""
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     if args.config is not None and not args.config.is_file():
         print(f"biped-gait-launch: error: no config file {args.config}", file=sys.stderr)
         return 2

@@ -32,6 +32,7 @@ class LiveView:
         self._context = foxglove.Context()
         self._channels: dict[str, object] = {}  # topic -> its foxglove.Channel
         self._latched: dict[str, tuple[bytes, int]] = {}  # topic -> its latest message and stamp (ns)
+        self._closed = False  # a walk's step may still log to a view stopped at run time: dropped
         self.server = foxglove.start_server(name=name, host=host, port=port, context=self._context,
                                             capabilities=[Capability.Time], server_listener=_listener(self))
 
@@ -54,6 +55,8 @@ class LiveView:
     def log(self, topic: str, data: bytes, stamp_ns: int | None = None) -> None:
         """Send the CDR bytes of one message on ``topic`` to its subscribers, stamped ``stamp_ns``
         (ns; default: now)."""
+        if self._closed:
+            return
         stamp = time.time_ns() if stamp_ns is None else int(stamp_ns)
         if topic in self._latched:
             self._latched[topic] = (data, stamp)
@@ -61,7 +64,8 @@ class LiveView:
 
     def time(self, stamp_ns: int) -> None:
         """Tell the clients the current (simulated) time (ns)."""
-        self.server.broadcast_time(int(stamp_ns))
+        if not self._closed:
+            self.server.broadcast_time(int(stamp_ns))
 
     def resend_latched(self, topic: str) -> None:
         """Send ``topic``'s latest message again if it is latched (a client just subscribed)."""
@@ -70,7 +74,8 @@ class LiveView:
             self._channels[topic].log(data, log_time=stamp)
 
     def close(self) -> None:
-        """Stop the server (its clients are disconnected)."""
+        """Stop the server (its clients are disconnected); what is logged afterwards is dropped."""
+        self._closed = True
         self.server.stop()
 
 

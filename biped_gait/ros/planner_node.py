@@ -7,13 +7,19 @@
   transient-local, depth 1, so a late subscriber gets the latest one;
 - recording (parameter ``record``): every request with its response (PlanGaitCall messages on
   ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``, by a writer
-  thread: an exchange is queued as it is answered and serialized and written off the request path.
+  thread: an exchange is queued as it is answered and serialized and written off the request path;
+- ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, every second): requests, solves and their
+  times, cache hits, refusals, optimizations, the recording.
 
-A thin node: requests are converted and handed to the core (``GaitPlanner``); nothing a client
-sends can stop it (bad input gets ``success = false`` and a message; text from a request is
-clipped in the log). The service's request queue holds ``queue_depth`` requests, so that a
-burst is answered, not dropped. A recording that fails (disk full, folder not writable or
-deleted) is one error line and the node keeps serving without recording. The default parameter
+A thin node: requests and goals carry the gait vocabulary (``biped_gait.gait_options``: the
+same fields, units and meanings as the command line's options), converted and handed to the
+core (``GaitPlanner``); nothing a client sends can stop it (bad input gets ``success = false``
+and a message; text from a request is clipped in the log). Identical requests and goals are
+answered from caches (``cache_size`` each). The service's and the action's request queues hold
+``queue_depth`` requests, so that a burst is answered, not dropped. ``cache_size`` and
+``record`` can be set at run time (parameter services); the others are read at start. A
+recording that fails (disk full, folder not writable or deleted) is one error line and the node
+keeps serving without recording. The default parameter
 set's planners (the service's and the action's, with their atlases) are made at start-up by a
 thread of their own, while the node comes up, so that the first request is answered at the speed
 of the next ones; a request that comes before they are ready waits for them.
@@ -51,14 +57,16 @@ from ..core.model.text import clip
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
-from .conversions import mode_from_msg, plan_msg, request_from_msg, request_key, stride_msgs, urdf_joints
+from .conversions import OPTION_NAMES, POINT_NAMES, gait_fields, plan_msg, request_key, stride_msgs, urdf_joints
+from .diagnostics import OK, WARN, Counters, Diagnostics, Report
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
-from .recorded import RecordedPublisher
+from .recorded import RecordedPublisher, finish_recording
 
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
+GOAL_NAMES = ("step_length", "period", "alpha_min", "alpha_max", "alpha_step")  # a goal's fields beyond the options
 CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms)
 GROUPS = ("service", "action")  # who owns a planner: the service's callbacks, the action's
 PARAMETERS = (
@@ -69,10 +77,12 @@ PARAMETERS = (
     Param("max_iterations", DEFAULTS.max_iterations, "Newton iterations allowed per solve (count)", 1, 200),
     Param("trajectory_samples", DEFAULTS.samples, "samples of the ballistic step in each plan's trajectory (count)",
           2, 2001),
-    Param("cache_size", 256, "plans kept for identical requests (count)", 0, 100000),
+    Param("cache_size", 256, "answers kept for identical requests, and for identical goals (count)", 0, 100000,
+          dynamic=True),
     Param("queue_depth", 1000, "requests each service and the action keep waiting (count): a burst beyond "
           "this is dropped by the middleware", 10, 100000),
-    Param("record", True, "record requests, responses and plans to MCAP (true/false)"),
+    Param("record", True, "record requests, responses and plans to MCAP (true/false; at run time: false finishes "
+          "the recording, true starts a new one)", dynamic=True),
     Param("record_dir", "bags", "directory of the recordings (path)"),
 )
 
@@ -126,30 +136,34 @@ class GaitPlannerNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        value = declare(self, PARAMETERS)
+        self._cache_lock = threading.Lock()
+        self._cache: OrderedDict[tuple, CachedAnswer] = OrderedDict()
+        self._goal_cache: OrderedDict[tuple, OptimizeArmSwing.Result] = OrderedDict()
+        self.recorder: BackgroundRecorder | None = None
+        self._recordings: list[RecordedPublisher] = []
+        value = declare(self, PARAMETERS, self._on_parameter)
         self._default_params = value["default_params"]
         load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
-        self._cache: OrderedDict[tuple, CachedAnswer] = OrderedDict()
-        self._cache_lock = threading.Lock()
+        self._cache_size = value["cache_size"]
         self._sequence = 0
         self._closing = threading.Event()
         self._in_flight = InFlight()
+        self.stats = Counters(("requests", "solves", "cache_hits", "refusals", "optimizations",
+                               "optimization_cache_hits"))
         self.settings = replace(DEFAULTS, samples=value["trajectory_samples"], tolerance=value["bvp_tolerance"],
                                 max_iterations=value["max_iterations"])
+        self._record_dir = value["record_dir"]
+        self.plan_publisher = RecordedPublisher(self, GaitPlan, "~/gait_plan", LATCHED, None)
+        self.call_recorder = RecordedPublisher(self, PlanGaitCall, "~/plan_gait/calls", EVENTS, None, publish=False)
+        self._recordings = [self.plan_publisher, self.call_recorder]
         self._prepared = {group: threading.Event() for group in GROUPS}
         threading.Thread(target=self._prepare, name="prepare_planners", daemon=True).start()
-        self.recorder: BackgroundRecorder | None = None
         if value["record"]:
-            stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
             try:
-                self.recorder = BackgroundRecorder(McapRecorder(value["record_dir"], f"planner_{stamp}"))
-                self.get_logger().info(f"recording to {self.recorder.path}")
-            except RecordingError as exc:
+                self._start_recording()
+            except ValueError as exc:
                 self.get_logger().error(f"{exc}; serving without recording")
-        self.plan_publisher = RecordedPublisher(self, GaitPlan, "~/gait_plan", LATCHED, self.recorder)
-        self.call_recorder = RecordedPublisher(self, PlanGaitCall, "~/plan_gait/calls", EVENTS, self.recorder,
-                                               publish=False)
         # One group each: the service keeps answering while an optimization runs; each group
         # owns its planners (Pinocchio data are not shared between threads).
         self._service_group = MutuallyExclusiveCallbackGroup()
@@ -173,6 +187,51 @@ class GaitPlannerNode(Node):
             result_service_qos_profile=queue,
             cancel_service_qos_profile=queue,
         )
+        self.diagnostics = Diagnostics(self, {"planning": self._report})
+
+    # Run-time parameters and recording ------------------------------------------------------
+    def _on_parameter(self, name: str, value: object) -> None:
+        """Apply a new ``cache_size`` or ``record`` (``ValueError``: refused, with the reason)."""
+        if name == "cache_size":
+            with self._cache_lock:
+                self._cache_size = int(value)
+                for cache in (self._cache, self._goal_cache):
+                    while len(cache) > self._cache_size:
+                        cache.popitem(last=False)
+        elif name == "record" and value and self.recorder is None:
+            self._start_recording()
+        elif name == "record" and not value and self.recorder is not None:
+            self._stop_recording()
+
+    def _start_recording(self) -> None:
+        """Record from now on, to a new file under ``record_dir``; ``ValueError`` if it cannot."""
+        stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
+        try:
+            recorder = BackgroundRecorder(McapRecorder(self._record_dir, f"planner_{stamp}"))
+        except RecordingError as exc:
+            raise ValueError(str(exc)) from None
+        for publisher in self._recordings:
+            publisher.record_to(recorder)
+        self.recorder = recorder
+        self.get_logger().info(f"recording to {recorder.path}")
+
+    def _stop_recording(self) -> None:
+        """Finish the recording (what is queued is written)."""
+        recorder, self.recorder = self.recorder, None
+        finish_recording(self._recordings, recorder, self.get_logger())
+
+    def _report(self) -> Report:
+        """The planning part of ``/diagnostics``."""
+        figures = self.stats.figures()
+        with self._cache_lock:
+            figures.update(cached_plans=len(self._cache), cached_optimizations=len(self._goal_cache),
+                           cache_size=self._cache_size)
+        recorder = self.recorder
+        figures["recording"] = recorder.path if recorder is not None else "off"
+        if recorder is not None and recorder.failure:
+            return Report(WARN, f"serving; recording failed: {clip(recorder.failure)}", figures)
+        return Report(OK, f"serving: {figures['requests']} requests, {figures['solves']} solves, "
+                      f"{figures['cache_hits']} cache hits, {figures['refusals']} refused", figures)
 
     def _prepare(self) -> None:
         """Make the default parameter set's planner of each group (the service's first) and plan
@@ -211,6 +270,7 @@ class GaitPlannerNode(Node):
             return self._serve(request, response)
 
     def _serve(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+        self.stats.count("requests")
         try:
             self._answer(request, response)
         except ValueError as exc:
@@ -219,26 +279,26 @@ class GaitPlannerNode(Node):
             self.get_logger().error(f"plan_gait failed: {clip(repr(exc))}")
             response.success, response.message = False, f"internal error: {clip(repr(exc))}"
         if not response.success:
+            self.stats.count("refusals")
             self.get_logger().warn(f"plan_gait refused: {clip(response.message)}")
         self._record_call(request, response)
         return response
 
     def _answer(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
         """Answer from the cache (the first answer's success and message, marked cached), else
-        plan: ``success`` only for an admissible gait; otherwise the reasons and, when the atlas
-        knows, where the nearest admissible gaits are."""
-        core_request = request_from_msg(request, self._default_params)
-        key = request_key(core_request)
-        with self._cache_lock:
-            cached = self._cache.get(key)
-            if cached is not None:
-                self._cache.move_to_end(key)
+        plan: ``success`` only for an admissible gait; otherwise the reasons (a gait that misses
+        only the margins says so) and, when the atlas knows, where the nearest admissible gaits are."""
+        fields = gait_fields(request, self._default_params, (*POINT_NAMES, *OPTION_NAMES))
+        key = request_key(fields)
+        cached = self._cached(self._cache, key)
         if cached is not None:
+            self.stats.count("cache_hits")
             response.success = cached.success
             response.plan = cached.compact if request.omit_trajectory else cached.plan
             response.next_steps = list(cached.next_compact if request.omit_trajectory else cached.next_steps)
             response.message = f"{cached.message} (cached)"
             return
+        core_request = GaitRequest(**fields)
         planner = self._planner(core_request.params, "service")
         joints = urdf_joints(planner.model)
         if math.isfinite(core_request.turn_radius):
@@ -247,6 +307,8 @@ class GaitPlannerNode(Node):
         else:
             gait = planner.plan(core_request)
             plan, next_steps = plan_msg(gait, self._header(), joints), []
+        self.stats.count("solves")
+        self.stats.time(gait.solve_time_s)
         response.success = gait.admissible
         if gait.admissible:
             response.message = f"admissible (found by {gait.found})"
@@ -257,12 +319,24 @@ class GaitPlannerNode(Node):
                               tuple(without_trajectory(p) for p in next_steps))
         response.plan = answer.compact if request.omit_trajectory else plan
         response.next_steps = list(answer.next_compact if request.omit_trajectory else answer.next_steps)
-        with self._cache_lock:
-            self._cache[key] = answer
-            while len(self._cache) > self.get_parameter("cache_size").value:
-                self._cache.popitem(last=False)
+        self._keep(self._cache, key, answer)
         if gait.admissible:
             self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
+
+    def _cached(self, cache: OrderedDict, key: tuple):
+        """The answer ``cache`` keeps for ``key`` (made its most recent), or None."""
+        with self._cache_lock:
+            answer = cache.get(key)
+            if answer is not None:
+                cache.move_to_end(key)
+        return answer
+
+    def _keep(self, cache: OrderedDict, key: tuple, answer: object) -> None:
+        """Keep ``answer`` in ``cache`` (the oldest beyond ``cache_size`` dropped)."""
+        with self._cache_lock:
+            cache[key] = answer
+            while len(cache) > self._cache_size:
+                cache.popitem(last=False)
 
     def _record_call(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
         """Record the exchange as a PlanGaitCall, built and serialized on the recorder's thread
@@ -297,9 +371,49 @@ class GaitPlannerNode(Node):
             return self._optimize(goal_handle)
 
     def _optimize(self, goal_handle) -> OptimizeArmSwing.Result:
+        """Answer a goal from the cache (the first answer, its message marked cached), else
+        optimize with feedback per amplitude solved; an optimum found and a range without any
+        admissible gait are kept for identical goals."""
         goal = goal_handle.request
+        self.stats.count("optimizations")
+        try:
+            fields = gait_fields(goal, self._default_params, (*GOAL_NAMES, *OPTION_NAMES))
+        except ValueError as exc:
+            return self._refuse_goal(goal_handle, OptimizeArmSwing.Result(message=clip(str(exc))))
+        key = request_key(fields)
+        cached = self._cached(self._goal_cache, key)
+        if cached is not None:
+            self.stats.count("optimization_cache_hits")
+            result = copy.copy(cached)
+            result.message = f"{cached.message} (cached)"
+            if result.success:
+                goal_handle.succeed()
+                return result
+            return self._refuse_goal(goal_handle, result)
+        result, keep = self._optimize_now(goal_handle, fields)
+        if keep:
+            self._keep(self._goal_cache, key, result)
+        if result.success:
+            goal_handle.succeed()
+        elif goal_handle.is_cancel_requested:
+            goal_handle.canceled()
+        else:
+            self._refuse_goal(goal_handle, result)
+        return result
+
+    def _refuse_goal(self, goal_handle, result: OptimizeArmSwing.Result) -> OptimizeArmSwing.Result:
+        goal_handle.abort()
+        self.stats.count("refusals")
+        self.get_logger().warn(f"optimize_arm_swing refused: {result.message}")
+        return result
+
+    def _optimize_now(self, goal_handle, fields: dict[str, object]) -> tuple[OptimizeArmSwing.Result, bool]:
+        """The optimization of a goal (``fields``: its gait vocabulary's fields and range) and
+        whether its answer may be kept for identical goals."""
         result = OptimizeArmSwing.Result()
         evaluated: list[tuple[float, float]] = []
+        low, high, step = fields.pop("alpha_min"), fields.pop("alpha_max"), fields.pop("alpha_step")
+        length, period, mode, params = (fields.pop(name) for name in ("step_length", "period", "mode", "params"))
 
         def on_result(gait) -> None:
             effort = gait.W if gait.usable else math.nan
@@ -311,35 +425,30 @@ class GaitPlannerNode(Node):
             if goal_handle.is_cancel_requested or self._closing.is_set():
                 raise Canceled()
 
+        keep = False
         try:
-            check_goal(goal)
-            expected = expected_solves((goal.alpha_min, goal.alpha_max))
-            planner = self._planner(goal.params or self._default_params, "action")
-            found = optimal_arm_amplitude(planner, goal.step_length, goal.period, mode_from_msg(goal.mode),
-                                          (goal.alpha_min, goal.alpha_max), on_result=on_result)
+            check_goal(length, period, low, high, step)
+            expected = expected_solves((low, high), step)
+            planner = self._planner(params, "action")
+            found = optimal_arm_amplitude(planner, length, period, mode, (low, high), step, on_result=on_result,
+                                          options=fields)
         except Canceled:
-            if goal_handle.is_cancel_requested:
-                goal_handle.canceled()
-                result.message = f"canceled after {len(evaluated)} gaits"
-            else:
-                goal_handle.abort()
-                result.message = f"the planner is stopping: aborted after {len(evaluated)} gaits"
+            result.message = (f"canceled after {len(evaluated)} gaits" if goal_handle.is_cancel_requested else
+                              f"the planner is stopping: aborted after {len(evaluated)} gaits")
         except (ValueError, NoAdmissibleGait) as exc:
-            goal_handle.abort()
             result.message = clip(str(exc) or type(exc).__name__)
-            self.get_logger().warn(f"optimize_arm_swing refused: {result.message}")
+            keep = isinstance(exc, NoAdmissibleGait)
         except Exception as exc:  # noqa: BLE001  a solver failure must not take the node down
             self.get_logger().error(f"optimize_arm_swing failed: {clip(repr(exc))}")
-            goal_handle.abort()
             result.message = f"internal error: {clip(repr(exc))}"
         else:
-            goal_handle.succeed()
             result.success, result.message, result.interior = True, found.describe(), found.interior
             result.alpha_opt, result.effort_opt, result.theta_opt = found.alpha, found.W, found.gait.theta
+            keep = True
         evaluated.sort()
         result.alphas = [a for a, _ in evaluated]
         result.efforts = [w for _, w in evaluated]
-        return result
+        return result, keep
 
     def close(self) -> None:
         """Stop an optimization in progress, let the callback running end (a solve, at most
@@ -347,22 +456,26 @@ class GaitPlannerNode(Node):
         included); ``RecordingError`` if the file could not be finished."""
         self._closing.set()
         self._in_flight.wait_idle(CLOSE_WAIT)
-        if self.recorder is not None:
-            self.recorder.close()
-            if not self.recorder.failure:
-                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.path}")
+        recorder = self.recorder
+        if recorder is not None:
+            recorder.close()
+            if not recorder.failure:
+                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {recorder.path}")
 
 
-def check_goal(goal: OptimizeArmSwing.Goal) -> None:
-    """``ValueError`` (one line) for a goal whose numbers are not finite or whose arm range is
-    not 0 <= alpha_min < alpha_max < pi/2 (rad); L and T are checked by the core."""
-    for name in ("step_length", "period", "alpha_min", "alpha_max"):
-        value = getattr(goal, name)
+def check_goal(step_length: float, period: float, alpha_min: float, alpha_max: float, alpha_step: float) -> None:
+    """``ValueError`` (one line) for a goal whose numbers are not finite, whose arm range is not
+    0 <= alpha_min < alpha_max < pi/2 (rad) or whose step is not positive; L, T and the options
+    are checked by the core."""
+    for name, value in (("step_length", step_length), ("period", period), ("alpha_min", alpha_min),
+                        ("alpha_max", alpha_max), ("alpha_step", alpha_step)):
         if not math.isfinite(value):
             raise ValueError(f"{name} must be a finite number, got {value}")
-    if not 0.0 <= goal.alpha_min < goal.alpha_max < math.pi / 2:
+    if not 0.0 <= alpha_min < alpha_max < math.pi / 2:
         raise ValueError(f"the arm range must satisfy 0 <= alpha_min < alpha_max < pi/2 rad, got "
-                         f"[{goal.alpha_min:g}, {goal.alpha_max:g}] rad")
+                         f"[{alpha_min:g}, {alpha_max:g}] rad")
+    if not alpha_step > 0:
+        raise ValueError(f"alpha_step must be positive, got {alpha_step:g} rad")
 
 
 def main(args: list[str] | None = None) -> int:

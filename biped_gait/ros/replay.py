@@ -269,7 +269,7 @@ class ReplayNode(Node):
             self._worker.join(timeout=5.0)
 
 
-def _parser() -> OneLineParser:
+def build_parser() -> OneLineParser:
     parser = OneLineParser(prog=PROGRAM, description="Publish a recording's messages with their recorded timing.")
     parser.add_argument("bag", type=Path, metavar="BAG", help="rosbag2 directory or .mcap file")
     parser.add_argument("--rate", type=float, default=1.0, metavar="R",
@@ -287,7 +287,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point ``biped-gait-replay``; returns the exit status. ROS arguments
     (``--ros-args ...``) go to rclpy, the others to this command."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    parser = _parser()
+    parser = build_parser()
     args = parser.parse_args(remove_ros_args([PROGRAM, *argv])[1:])
     if not (math.isfinite(args.rate) and args.rate > 0):
         parser.error(f"--rate must be a positive number, got {args.rate:g}")

@@ -2,9 +2,12 @@
 core's ``Walk``, paces it against the wall clock, and publishes and records what it yields.
 
 Plan: the latest on the planner's ``gait_plan`` topic (``plan_source: topic``) or its own
-request to the planner's ``plan_gait`` service (``plan_source: service``, with the node's
-``step_length``, ``period``, ``arm_amplitude``, ``mode``; ``arm_amplitude < 0`` asks the
-planner's ``optimize_arm_swing`` action for the optimal amplitude first).
+request to the planner's ``plan_gait`` service (``plan_source: service``), whose fields are the
+node's parameters of the gait vocabulary (``biped_gait.gait_options``: ``step_length``,
+``period``, ``arm_amplitude``, ``mode``, ``params``, ``closure``, ``effort``,
+``effort_coordinates``, ``friction``, ``rate_bound``, ``min_clearance``, ``friction_margin``:
+the names, units and meanings of the service's fields; checked at start); with
+``optimize_arms`` the planner's ``optimize_arm_swing`` action finds the amplitude first.
 
 Topics (stamps are the walk's simulated time, started at the node's clock: the wall clock, or
 with ``use_sim_time`` the simulated time, from 0): ``/clock`` (rosgraph_msgs/Clock, that time,
@@ -20,11 +23,22 @@ the same bytes as were published, and so does the optional Foxglove live view
 are serialized at once (``walk_messages``). Controls: ``~/pause``, ``~/resume``, ``~/reset`` and
 the step counter ``~/iterations`` (``sim_controls``).
 
+Starting and stopping: with ``start_from_rest`` the walk would begin standing, through a start
+step planned by the core (``start_stop``); ``/cmd_vel`` linear.x 0 asks it to stop. The core
+refuses both for the shipped parameter sets with the physical reason (docs/model.md section
+8.10), which the node logs: the walk then does not start (exit status 1), or walks on at the
+slowest gait.
+
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Speed and turn:
 ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in rad/s), walked
 with transition steps within the envelope published on ``~/velocity_envelope``
 (biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
+
+``/diagnostics`` (diagnostic_msgs/DiagnosticArray, every second): the walk's state, steps,
+falls, pushes and the recording. ``record`` and ``live_view`` can be set at run time (parameter
+services: the recording finished or a new one started, the live view stopped or started); the
+other parameters are read at start, and one the node does not have refuses the start.
 
 Outcomes: the walk finished (exit status 0), the robot fell, the walk could not start (a plan
 that cannot be walked, a plan naming a parameter set that is neither shipped nor this node's
@@ -64,10 +78,13 @@ from biped_gait_interfaces.msg import AngularMomentum, GaitEvent, GaitPhase, Gai
 from biped_gait_interfaces.srv import PlanGait, Push
 
 from ..core.gait.configurations import GaitMode
+from ..core.gait.planner import GaitRequest, validate_request
+from ..gait_options import OPTIONS, POINT, GaitOption
 from ..core.walking.pacing import Pacer
 from ..core.model.params import load_params, shipped_param_names
 from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
+from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
@@ -78,13 +95,14 @@ from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
 from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError, SampleRows
 from .conversions import MODE_TO_MSG, orbit_from_msg
+from .diagnostics import ERROR, OK, WARN, Counters, Diagnostics, Report
 from .gait_phase import GaitPhases
 from .live_view import DEFAULT_PORT, LiveView
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED, STREAM
 from .push_service import SCRIPT_FORMAT, PushScheduler, parse_pushes
-from .recorded import RecordedPublisher, raw_sender
+from .recorded import RecordedPublisher, finish_recording, raw_sender
 from .sim_clock import SimClock
 from .sim_controls import SimControls
 from .speed_command import SpeedCommand
@@ -93,22 +111,30 @@ from .walk_messages import SampleMessages, event_msg, stamp_msg, tf_msg
 NODE_NAME = "biped_gait_simulator"
 LOG_PERIOD = 5.0  # s between the log lines of a long wait
 RECORD_EVERY = 16  # samples published between two hand-overs to the recorder (a kill loses them at most)
+
+
+def _gait_parameter(option: GaitOption) -> Param:
+    """The simulator's parameter of one option of the gait vocabulary: the field of its request."""
+    if option.name == "params":
+        return Param("params", "", "parameter set of the requested plan (a shipped name or a YAML file path); empty: "
+                     "the planner's. A plan from the wire is walked only with a shipped set or this file")
+    unit = " (rad here; the biped-gait command takes degrees)" if option.degrees else (
+        f" ({option.unit})" if option.unit else "")
+    return Param(option.name, option.default, f"{option.help}{unit}; for the requested plan", choices=option.choices,
+                 finite=False)
+
+
+GAIT_PARAMETERS = tuple(_gait_parameter(option) for option in (*POINT, *OPTIONS))
+GAIT_NAMES = tuple(param.name for param in GAIT_PARAMETERS)
 PARAMETERS = (
     Param("plan_source", "service", "where the plan comes from: 'service' requests one, 'topic' walks the latest "
           "one published", choices=("service", "topic")),
     Param("plan_service", "/biped_gait_planner/plan_gait", "the planner's PlanGait service (name)"),
     Param("plan_topic", "/biped_gait_planner/gait_plan", "the planner's GaitPlan topic (name)"),
     Param("optimize_action", "/biped_gait_planner/optimize_arm_swing", "the planner's OptimizeArmSwing action (name)"),
-    Param("step_length", 0.45, "L of the requested plan (m)", 0.01, 2.0),
-    Param("period", 0.45, "T of the requested plan (s)", 0.01, 10.0),
-    Param("arm_amplitude", math.radians(23.5), "alpha of the requested plan (rad here; the biped-gait command "
-          "takes degrees); negative: ask the planner's action for the optimal one", -math.pi / 2, math.pi / 2),
-    Param("mode", "normal", "arm swing of the requested plan", choices=tuple(m.value for m in GaitMode)),
-    Param("turn_radius", math.inf, "radius of the circle of the requested plan (m, signed: positive turns left; "
-          "inf: straight): a stride of two steps, which needs hip roll and yaw joints (params aoustin2013-hips)",
-          infinite=True),
-    Param("params", "", "parameter set of the requested plan (a shipped name or a YAML file path); empty: the "
-          "planner's. A plan from the wire is walked only with a shipped set or this file"),
+    *GAIT_PARAMETERS,
+    Param("optimize_arms", False, "ask the planner's action for the optimal arm amplitude (on its default range) "
+          "and walk that, instead of arm_amplitude (true/false)"),
     Param("steps", 20, "steps to walk (count); 0: until stopped", 0, 1000000),
     Param("real_time_factor", 1.0, "simulated seconds per wall second; 0: as fast as possible", 0.0, 1000.0),
     Param("publish_rate", 500.0, "samples per second of simulated time (Hz)", 1.0, 100000.0),
@@ -118,6 +144,9 @@ PARAMETERS = (
           choices=("momentum", "duration")),
     Param("momentum_rate", DEFAULT_RATE, "with recovery 'momentum': the momentum error's contraction per step "
           "(0: dead-beat)", 0.0, 0.99),
+    Param("start_from_rest", False, "start the walk from standing at rest (both feet down) through a start step "
+          "of its own (true/false; the core plans it and refuses it with the physical reason: docs/model.md "
+          "section 8.10); false: the walk starts on the gait's orbit"),
     Param("pushes", "", f"scripted pushes on the trunk: {SCRIPT_FORMAT} (step index, phase as a fraction of T in "
           "[0, 1), impulse in N s, world axes); also the ~/push service"),
     Param("speed_rule", SPEED_RULES[0], "how /cmd_vel speeds pick gaits: 'least_effort' (least W per metre among "
@@ -128,14 +157,16 @@ PARAMETERS = (
           "turn radius at least its inverse; models with hip roll and yaw joints)", 0.0, 2.0),
     Param("max_curvature_change", MAX_CURVATURE_CHANGE, "largest change of the walked gait's curvature per step (1/m)",
           0.001, 2.0),
-    Param("record", True, "record everything published to MCAP (true/false)"),
+    Param("record", True, "record everything published to MCAP (true/false; at run time: false finishes the "
+          "recording, true starts a new one, the latched topics first)", dynamic=True),
     Param("record_dir", "bags", "directory of the recordings (path)"),
     Param("chunk_size", DEFAULT_CHUNK_SIZE, "MCAP chunk size (bytes): at most this much is lost if the process is "
           "killed", 1024, 64 * 1024 * 1024),
     Param("exit_when_done", False, "end the process when the walk ends (true/false; the launcher sets it)"),
     Param("wait_for_subscribers", 0, "start walking once /joint_states has this many subscribers (count; "
           "discovery can take seconds)", 0, 100),
-    Param("live_view", False, "serve a Foxglove WebSocket live view of the walk (true/false)"),
+    Param("live_view", False, "serve a Foxglove WebSocket live view of the walk (true/false; at run time: started "
+          "or stopped)", dynamic=True),
     Param("live_view_host", "127.0.0.1", "address the live view's server binds (host; 0.0.0.0: every interface)"),
     Param("live_view_port", DEFAULT_PORT, "port of the live view's server (TCP port; 0: any free one)", 0, 65535),
     Param("wait_timeout", 60.0, "how long to wait for the planner's service or action, a plan on the topic, or "
@@ -152,8 +183,20 @@ class SimulatorNode(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__(NODE_NAME, **kwargs)
-        self.value = value = declare(self, PARAMETERS)
+        self._outputs: list[RecordedPublisher] = []
+        self._outputs_lock = threading.Lock()  # run-time changes of the recording and the live view
+        self.recorder: BackgroundRecorder | None = None
+        self.live: LiveView | None = None
+        self.walk_state = "starting"
+        self.stats = Counters(("touchdowns", "falls", "pushes"))
+        self.value = value = declare(self, PARAMETERS, self._on_parameter)
         prepare_walking()  # what the walk loads once, now rather than when it starts
+        gait = {name: value[name] for name in GAIT_NAMES}
+        try:
+            validate_request(GaitRequest(**{**gait, "params": ""}), load_params(value["params"] or None))
+        except ValueError as exc:
+            raise ValueError(f"{exc} (the requested plan's parameters: SI units, angles in rad here; the biped-gait "
+                             "command takes degrees)") from None
         self.pushes = PushScheduler(parse_pushes(value["pushes"]))
         self.source = value["plan_source"]
         self.rate = value["publish_rate"]
@@ -167,20 +210,21 @@ class SimulatorNode(Node):
         self._stop = threading.Event()
         self.exit_requested = threading.Event()
         self.failed = False
-        self.recorder: BackgroundRecorder | None = None
         self._recording_failure = ""
         if value["record"]:
-            stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
             try:
-                self.recorder = BackgroundRecorder(
-                    RecorderProcess(value["record_dir"], f"walk_{stamp}", chunk_size=value["chunk_size"]))
-                self.get_logger().info(f"recording to {self.recorder.bag_dir}")
-            except RecordingError as exc:
+                self.recorder = self._new_recorder()
+            except ValueError as exc:
                 self._recording_failure = str(exc)
-        self.live = self._start_live_view() if value["live_view"] else None
+        if value["live_view"]:
+            try:
+                self.live = self._start_live_view()
+            except ValueError as exc:  # the walk goes on without it
+                self.get_logger().error(str(exc))
 
         def publisher(msg_type: type, topic: str, qos) -> RecordedPublisher:
-            return RecordedPublisher(self, msg_type, topic, qos, self.recorder, live=self.live)
+            self._outputs.append(RecordedPublisher(self, msg_type, topic, qos, self.recorder, live=self.live))
+            return self._outputs[-1]
 
         self.pub_joints = publisher(JointState, topics.JOINT_STATES, STREAM)
         self.pub_odom = publisher(Odometry, topics.ODOM, STREAM)
@@ -204,20 +248,69 @@ class SimulatorNode(Node):
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
         self.optimize_client = ActionClient(self, OptimizeArmSwing, value["optimize_action"], callback_group=self._group)
+        self.diagnostics = Diagnostics(self, {"walk": self._report}, self._group)
         self._worker = threading.Thread(target=self._run, name="walker", daemon=True)
         self._worker.start()
 
-    def _start_live_view(self) -> LiveView | None:
-        """The Foxglove live view on ``live_view_host``:``live_view_port``; None (and one error
-        line) if its server cannot start (the port taken): the walk goes on without it."""
+    # Outputs changed at run time -------------------------------------------------------------
+    def _new_recorder(self) -> BackgroundRecorder:
+        """A recording of its own under ``record_dir``; ``ValueError`` if it cannot be made."""
+        stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
+        try:
+            recorder = BackgroundRecorder(RecorderProcess(self.value["record_dir"], f"walk_{stamp}",
+                                                          chunk_size=self.value["chunk_size"]))
+        except RecordingError as exc:
+            raise ValueError(str(exc)) from None
+        self.get_logger().info(f"recording to {recorder.bag_dir}")
+        return recorder
+
+    def _start_live_view(self) -> LiveView:
+        """The Foxglove live view on ``live_view_host``:``live_view_port``; ``ValueError`` (one
+        line) if its server cannot start (the port taken)."""
         host, port = self.value["live_view_host"], self.value["live_view_port"]
         try:
             live = LiveView(host, port)
         except Exception as exc:  # noqa: BLE001  the SDK's error for a port taken, an address not here
-            self.get_logger().error(f"live view not started on {host}:{port}: {clip(str(exc))}")
-            return None
+            raise ValueError(f"live view not started on {host}:{port}: {clip(str(exc))}") from None
         self.get_logger().info(f"live view: open Foxglove on ws://{host}:{live.port}")
         return live
+
+    def _on_parameter(self, name: str, value: object) -> None:
+        """Start or stop the recording (``record``) or the live view (``live_view``) at run time;
+        ``ValueError`` refuses the change with its reason. A step in progress records and shows
+        its remaining samples with what it started with (dropped once that is closed)."""
+        with self._outputs_lock:
+            if name == "record" and value and self.recorder is None:
+                self.recorder = self._new_recorder()
+                for publisher in self._outputs:
+                    publisher.record_to(self.recorder)
+            elif name == "record" and not value and self.recorder is not None:
+                recorder, self.recorder = self.recorder, None
+                finish_recording(self._outputs, recorder, self.get_logger())
+            elif name == "live_view" and value and self.live is None:
+                self.live = self._start_live_view()
+                for publisher in self._outputs:
+                    publisher.show_on(self.live)
+            elif name == "live_view" and not value and self.live is not None:
+                live, self.live = self.live, None
+                for publisher in self._outputs:
+                    publisher.show_on(None)
+                live.close()
+                self.get_logger().info("live view stopped")
+
+    def _report(self) -> Report:
+        """The walk part of ``/diagnostics``."""
+        figures = {"state": "paused" if self.controls.paused and self.walk_state == "walking" else self.walk_state,
+                   "samples": self.controls.iterations, **self.stats.figures()}
+        recorder = self.recorder
+        figures["recording"] = str(recorder.bag_dir) if recorder is not None else "off"
+        figures["live_view"] = f"ws://{self.value['live_view_host']}:{self.live.port}" if self.live is not None else "off"
+        failure = recorder.failure if recorder is not None else self._recording_failure
+        if self.walk_state in ("fell", "not started") or failure:
+            return Report(ERROR, f"{figures['state']}{': recording failed: ' + clip(failure) if failure else ''}", figures)
+        if self.walk_state.startswith("waiting"):
+            return Report(WARN, self.walk_state, figures)
+        return Report(OK, f"{figures['state']}: {figures['touchdowns']} steps, {figures['falls']} falls", figures)
 
     @property
     def exit_status(self) -> int:
@@ -254,14 +347,16 @@ class SimulatorNode(Node):
     def _request_plan(self) -> GaitPlan:
         value, patience = self.value, self.value["wait_timeout"]
         mode = MODE_TO_MSG[GaitMode.parse(value["mode"])]
+        options = {name: value[name] for name in GAIT_NAMES if name not in ("arm_amplitude", "mode")}
+        self.walk_state = "waiting for the planner"
         self._wait_until(self.plan_client.service_is_ready, f"the planner service {value['plan_service']}", patience)
         alpha = value["arm_amplitude"]
-        if alpha < 0:
+        if value["optimize_arms"]:
             self._wait_until(self.optimize_client.server_is_ready,
                              f"the planner's action {value['optimize_action']}", patience)
             low, high = DEFAULTS.arm_range
-            goal = OptimizeArmSwing.Goal(step_length=value["step_length"], period=value["period"], mode=mode,
-                                         alpha_min=low, alpha_max=high, params=value["params"])
+            goal = OptimizeArmSwing.Goal(mode=mode, alpha_min=low, alpha_max=high, alpha_step=DEFAULTS.arm_coarse_step,
+                                         **options)
             handle = self._answer(self.optimize_client.send_goal_async(goal), "optimize_arm_swing")
             result = self._answer(handle.get_result_async(), "optimize_arm_swing").result
             if not result.success:
@@ -269,9 +364,7 @@ class SimulatorNode(Node):
             alpha = result.alpha_opt
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
         # the walk needs the plan's boundary states, not its sampled trajectory
-        request = PlanGait.Request(step_length=value["step_length"], period=value["period"], arm_amplitude=alpha,
-                                   mode=mode, params=value["params"], turn_radius=value["turn_radius"],
-                                   omit_trajectory=True)
+        request = PlanGait.Request(arm_amplitude=alpha, mode=mode, omit_trajectory=True, **options)
         response = self._call_plan(request)
         if not response.success:
             raise NoPlan(f"the planner refused: {response.message}")
@@ -297,6 +390,7 @@ class SimulatorNode(Node):
         if self.source == "service":
             return self._request_plan()
         topic = self.value["plan_topic"]
+        self.walk_state = "waiting for a plan on the topic"
         self._wait_until(self._plan_ready.is_set, f"a GaitPlan on {topic}", self.value["wait_timeout"])
         return [self._latest_plan]
 
@@ -355,6 +449,7 @@ class SimulatorNode(Node):
         if self._stopping():
             return
         self.failed = True
+        self.walk_state = "not started"
         self.get_logger().error(f"the walk did not start: {clip(reason, 1000)}")
         stamp = stamp_msg(self.get_clock().now().nanoseconds)
         self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp, clip(reason, 1000)))
@@ -364,6 +459,7 @@ class SimulatorNode(Node):
         the walk ends (with ``exit_when_done``) or the node stops. Simulated time runs on across
         resets."""
         wanted = self.value["wait_for_subscribers"]
+        self.walk_state = "waiting for subscribers"
         try:
             self._wait_until(lambda: self.pub_joints.subscription_count() >= wanted,
                              f"{wanted} subscriber(s) of {topics.JOINT_STATES}", self.value["wait_timeout"])
@@ -382,6 +478,7 @@ class SimulatorNode(Node):
         try:
             while True:
                 self.controls.take_reset()
+                self.walk_state = "walking"
                 ended = self._walk_once(orbit, start_ns, pacer)
                 if self._stopping() or not ended and not self.controls.reset_requested():
                     return
@@ -409,6 +506,10 @@ class SimulatorNode(Node):
             self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
         if walk.model is not None:
             self._actuated = walk.model.actuated_names
+        if walk.walker is not None and self.value["start_from_rest"]:
+            self._not_started("cannot start from rest: " + why_not("start", walk.walker.hybrid, walk.walker.orbit,
+                                                                    walk.walker.grid))
+            return True
         if walk.walker is not None:
             self.speed.start(walk.walker, orbit[0].params or None)
             self.pushes.start()
@@ -426,17 +527,22 @@ class SimulatorNode(Node):
                     return False
             elif isinstance(item, AppliedPush):
                 text = f"push of {item.impulse.tolist()} N s on the trunk in step {item.step} at t = {item.t:.4f} s"
+                self.stats.count("pushes")
                 self.get_logger().info(text)
                 self._event(GaitEvent.PUSH, item.step, item.stance_side, item.time_in_step, base_ns, item.t, text)
             elif isinstance(item, Touchdown):
+                self.stats.count("touchdowns")
                 self._event(GaitEvent.TOUCHDOWN, item.step, item.next_stance_side, item.t_step, base_ns, item.t,
                             f"touchdown of step {item.step}", item)
                 self.phases.touchdown(item.step, item.t, base_ns)
             elif isinstance(item, Fell):
                 self.failed = True
+                self.walk_state = "fell"
+                self.stats.count("falls")
                 self.get_logger().error(f"the robot fell in step {item.step}: {item.reason}")
                 self._event(GaitEvent.FALL, item.step, item.stance_side, item.time_in_step, base_ns, item.t, item.reason)
             elif isinstance(item, Finished):
+                self.walk_state = "finished"
                 self._event(GaitEvent.FINISHED, item.steps, item.stance_side, 0.0, base_ns, item.t,
                             f"walked {item.steps} steps")
                 wall = pacer.elapsed()
@@ -508,16 +614,18 @@ class SimulatorNode(Node):
         ``RecordingError`` if the file could not be finished (the walk then counts as failed)."""
         self._stop.set()
         self._worker.join(timeout=1.5)
-        if self.live is not None:
-            self.live.close()
-        if self.recorder is not None:
+        with self._outputs_lock:
+            live, recorder = self.live, self.recorder
+        if live is not None:
+            live.close()
+        if recorder is not None:
             try:
-                self.recorder.close()
+                recorder.close()
             except RecordingError:
                 self.failed = True
                 raise
-            if not self.recorder.failure:
-                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {self.recorder.bag_dir}")
+            if not recorder.failure:
+                rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {recorder.bag_dir}")
 
 
 def main(args: list[str] | None = None) -> int:

@@ -11,6 +11,11 @@ angular.z, with a warning once), clamped to the envelope (a warning stating it w
 command changes), which is published on ``~/velocity_envelope`` (transient local) when the walk
 starts. linear.y (no sideways gaits), linear.z, angular.x and angular.y are ignored (a warning
 once).
+
+linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop: the core plans the stop step
+from the walked gait (``start_stop.plan_stop``, in a thread of its own, once per gait) and says
+why it cannot be made (for the shipped parameter sets it cannot: docs/model.md section 8.10);
+the command is then walked as the slowest gait of the envelope, as before.
 """
 
 from __future__ import annotations
@@ -23,13 +28,18 @@ from geometry_msgs.msg import Twist
 from rclpy.node import Node
 from std_msgs.msg import Header
 
+from ..core.dynamics.hybrid import HybridStep
 from ..core.dynamics.settings import DEFAULTS
+from ..core.model.biped import BipedModel
+from ..core.walking.start_stop import why_not
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.walk import Walker
 from ..recording import topics
 from .qos import LATCHED
 from .walk_messages import stamp_msg
+
+STOP_SPEED = 1e-3  # m/s: a commanded linear.x below this asks the walk to stop
 
 
 class SpeedCommand:
@@ -47,6 +57,8 @@ class SpeedCommand:
         self._lock = threading.Lock()
         self._said_clamped: tuple[float, float] | None = None
         self._said_ignored: set[str] = set()
+        self._stop_checked: set[tuple[float, float]] = set()  # the gaits (L, T) a stop was planned from
+        self._grid = DEFAULTS.walk_steps
         self.pub_envelope = publisher(VelocityEnvelope, topics.VELOCITY_ENVELOPE, LATCHED)
 
     def start(self, walker: Walker, source: str | None) -> None:
@@ -61,6 +73,7 @@ class SpeedCommand:
                                                stamp_msg(self.node.get_clock().now().nanoseconds)))
         with self._lock:
             self.follower, pending = follower, self._pending
+            self._grid = walker.grid
         if pending is not None:
             self._command(*pending)
 
@@ -85,6 +98,8 @@ class SpeedCommand:
 
     def _command(self, speed: float, yaw_rate: float) -> None:
         follower = self.follower
+        if speed < STOP_SPEED:
+            self._stop(follower)
         if yaw_rate and follower.envelope.max_curvature == 0.0 and "angular.z" not in self._said_ignored:
             self._said_ignored.add("angular.z")
             self.node.get_logger().warn("speed command: angular.z ignored: the model walks straight (turning needs "
@@ -96,6 +111,24 @@ class SpeedCommand:
                 f"speed command {speed:g} m/s, {yaw_rate:g} rad/s is outside the envelope "
                 f"({follower.envelope.describe()}): clamped to {walked:.3f} m/s, {turned:.3f} rad/s")
         self._said_clamped = (walked, turned) if clamped else None
+
+    def _stop(self, follower: SpeedFollower) -> None:
+        """A command to stop: plan the stop from the gait aimed at (once per gait, in a thread:
+        it takes a second or two) and log the outcome."""
+        orbit = follower.orbit
+        key = (orbit.step_length, orbit.period)
+        if key in self._stop_checked:
+            return
+        self._stop_checked.add(key)
+        logger, grid = self.node.get_logger(), self._grid
+
+        def plan() -> None:
+            hybrid = HybridStep(BipedModel.from_params(follower.bm.params))
+            reason = why_not("stop", hybrid, orbit, grid)
+            logger.warn(f"speed command: cannot stop from the gait L = {orbit.step_length:.3f} m, T = "
+                        f"{orbit.period:.3f} s: {reason}; walking on at the slowest gait")
+
+        threading.Thread(target=plan, name="stop-plan", daemon=True).start()
 
     def before_step(self, walker: Walker) -> None:
         """One transition towards the commanded speed and turn, if the walker is not at them

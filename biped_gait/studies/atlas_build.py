@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, replace
 
@@ -64,35 +64,39 @@ def node_record(gait: Gait | None, on_branch: bool) -> dict[str, object]:
     return record
 
 
-def spine(planner: GaitPlanner, mode: GaitMode, grid: Grid) -> tuple[tuple[int, int], list[Gait | None]]:
+def spine(planner: GaitPlanner, mode: GaitMode, grid: Grid, options: Mapping[str, object] | None = None
+          ) -> tuple[tuple[int, int], list[Gait | None]]:
     """The (L, T) node nearest to ``SEED`` and the human-like gaits there at every alpha of the
-    grid (None where the path fails), by continuation in alpha from the cold-started seed."""
+    grid (None where the path fails), by continuation in alpha from the cold-started seed;
+    ``options``: further ``GaitRequest`` fields of every gait."""
+    options = options or {}
     i = int(np.argmin(np.abs(grid.step_lengths - SEED[0])))
     j = int(np.argmin(np.abs(grid.periods - SEED[1])))
-    seed = planner.plan(GaitRequest(*SEED, mode), cold=True)
+    seed = planner.plan(GaitRequest(*SEED, mode, **options), cold=True)
     node = (float(grid.step_lengths[i]), float(grid.periods[j]))
     gaits = []
     for alpha in grid.alphas:
-        guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, mode, "theta", planner.settings,
-                            SEED, seed.warm_start(), (*node, float(alpha))) if seed.converged else None
-        gait = planner.plan(GaitRequest(*node, float(alpha), mode), guess) if guess is not None else None
+        guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, mode, seed.problem.closure,
+                            planner.settings, SEED, seed.warm_start(), (*node, float(alpha))) if seed.converged else None
+        gait = planner.plan(GaitRequest(*node, float(alpha), mode, **options), guess) if guess is not None else None
         gaits.append(gait if gait is not None and gait.converged else None)
     return (i, j), gaits
 
 
 def _solve_from(planner: GaitPlanner, grid: Grid, k: int, mode: GaitMode, source: tuple[int, int], gait: Gait,
-                target: tuple[int, int]) -> Gait | None:
+                target: tuple[int, int], options: Mapping[str, object]) -> Gait | None:
     """The gait at node ``target`` (of alpha index ``k``) from the solved ``gait`` at ``source``,
-    on its branch: warm start, else continuation; None if neither stays on the branch."""
+    on its branch: warm start, else continuation; None if neither stays on the branch;
+    ``options``: further ``GaitRequest`` fields."""
     alpha = float(grid.alphas[k])
     point = (float(grid.step_lengths[target[0]]), float(grid.periods[target[1]]), alpha)
-    request = GaitRequest(point[0], point[1], alpha, mode)
+    request = GaitRequest(point[0], point[1], alpha, mode, **options)
     result = planner.plan(request, gait.warm_start())
     if _stays(result, gait):
         return result
     start = (float(grid.step_lengths[source[0]]), float(grid.periods[source[1]]), alpha)
-    guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, mode, "theta", planner.settings, start,
-                        gait.warm_start(), point)
+    guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, mode, gait.problem.closure,
+                        planner.settings, start, gait.warm_start(), point)
     if guess is None:
         return None
     result = planner.plan(request, guess)
@@ -104,16 +108,19 @@ def _stays(result: Gait, origin: Gait) -> bool:
     return result.converged and float(np.max(np.abs(result.step.qd_a - origin.step.qd_a))) <= BRANCH_JUMP
 
 
-def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: tuple[int, int], seed_guess) -> Slab:
+def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: tuple[int, int], seed_guess,
+               options: Mapping[str, object] | None = None) -> Slab:
     """Worker entry: every (L, T) node at alpha index ``k``, walked breadth-first from ``start``
-    whose gait is solved from ``seed_guess`` (qd(0), theta)."""
+    whose gait is solved from ``seed_guess`` (qd(0), theta); ``options``: further ``GaitRequest``
+    fields of every gait."""
+    options = options or {}
     planner = planner_for(params)
     shape = grid.shape[:2]
     empty = Atlas.empty(params, mode, Grid(grid.step_lengths, grid.periods, grid.alphas[k:k + 1]))
     nodes = {name: array[:, :, 0] for name, array in empty.nodes.items()}
     alpha = float(grid.alphas[k])
-    first = planner.plan(GaitRequest(float(grid.step_lengths[start[0]]), float(grid.periods[start[1]]), alpha, mode),
-                         seed_guess)
+    first = planner.plan(GaitRequest(float(grid.step_lengths[start[0]]), float(grid.periods[start[1]]), alpha, mode,
+                                     **options), seed_guess)
     solved: dict[tuple[int, int], Gait] = {}
     queue: deque[tuple[int, int]] = deque()
     if first.converged:
@@ -125,7 +132,7 @@ def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: t
             target = (source[0] + di, source[1] + dj)
             if not (0 <= target[0] < shape[0] and 0 <= target[1] < shape[1]) or target in solved:
                 continue
-            gait = _solve_from(planner, grid, k, mode, source, solved[source], target)
+            gait = _solve_from(planner, grid, k, mode, source, solved[source], target, options)
             if gait is not None:
                 solved[target] = gait
                 queue.append(target)
@@ -133,8 +140,8 @@ def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: t
         if index in solved:
             record = node_record(solved[index], True)
         else:  # not reached on the branch: what a cold solve finds there
-            cold = planner.plan(GaitRequest(float(grid.step_lengths[index[0]]), float(grid.periods[index[1]]), alpha, mode),
-                                cold=True)
+            cold = planner.plan(GaitRequest(float(grid.step_lengths[index[0]]), float(grid.periods[index[1]]), alpha, mode,
+                                            **options), cold=True)
             knee_lower = params.joints.role("knee").limits.lower
             human = cold.converged and cold.figures is not None and cold.figures.q9_min >= knee_lower - KNEE_TOLERANCE
             record = node_record(cold, human)
@@ -144,21 +151,22 @@ def build_slab(params: BipedParams, mode: GaitMode, grid: Grid, k: int, start: t
 
 
 def build_atlas(params: BipedParams, mode: GaitMode, executor: Executor, grid: Grid | None = None,
-                on_slab: Callable[[int], None] | None = None) -> Atlas:
+                on_slab: Callable[[int], None] | None = None, options: Mapping[str, object] | None = None) -> Atlas:
     """The atlas of ``params`` and ``mode`` on ``grid`` (default ``Grid.default()``), one task a
-    grid alpha on ``executor``; ``on_slab`` is told the node count of each finished task."""
+    grid alpha on ``executor``; ``on_slab`` is told the node count of each finished task;
+    ``options``: further ``GaitRequest`` fields of every gait (the planner's atlas has none)."""
     grid = grid or Grid.default()
     start_time = time.perf_counter()
     atlas = Atlas.empty(params, mode, grid)
-    start, gaits = spine(planner_for(params), mode, grid)
-    futures = {executor.submit(build_slab, params, mode, grid, k, start, gait.warm_start()): k
+    start, gaits = spine(planner_for(params), mode, grid, options)
+    futures = {executor.submit(build_slab, params, mode, grid, k, start, gait.warm_start(), options): k
                for k, gait in enumerate(gaits) if gait is not None}
     for slab in _completed(futures):
         for name, array in slab.nodes.items():
             atlas.nodes[name][:, :, slab.k] = array
         if on_slab is not None:
             on_slab(grid.shape[0] * grid.shape[1])
-    return replace(atlas, build_seconds=time.perf_counter() - start_time)
+    return replace(atlas, build_seconds=time.perf_counter() - start_time, options=dict(options or {}))
 
 
 def _completed(futures) -> Iterator[Slab]:

@@ -6,6 +6,8 @@
   of a sweep over periods).
 - ``momentum_figure``: the yaw angular momentum (kg m^2/s) about the vertical through the
   current stance foot over two successive steps, normal against anti-normal (Fig. 5).
+- ``plan_figure``: one planned step: its joint angles (deg), the ground reaction (N) with its
+  friction ratio against the coefficient, and the yaw angular momentum (kg m^2/s).
 """
 
 from __future__ import annotations
@@ -15,16 +17,20 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
+from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from ..core.gait.configurations import GaitMode
+from ..core.model.biped import SWING_TIP, BipedModel
 from .optimize import ArmOptimum
 from ..core.gait.gait import Gait
 
 LINE_STYLES = {GaitMode.NORMAL.value: "-", GaitMode.ANTI_NORMAL.value: "--"}
 DPI = 120
+MAX_CURVES = 8  # curves of one W-vs-T figure: more cannot be told apart
 
 
 def _new_figure() -> tuple[Figure, object]:
@@ -127,26 +133,101 @@ def two_step_momentum(gait: Gait) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([t, t + gait.period]), np.concatenate([h, -h])
 
 
-def momentum_figure(normal: Gait, anti_normal: Gait) -> Figure:
-    """Fig. 5: yaw angular momentum about the stance foot over two steps, both arm modes."""
+def momentum_figure(optimum: Gait, other: Gait) -> Figure:
+    """Fig. 5: yaw angular momentum about the stance foot over two steps, both arm modes (the
+    optimal gait of one, the other at its alpha)."""
     fig, ax = _new_figure()
-    for gait in (normal, anti_normal):
+    for gait in (optimum, other):
         t, h = two_step_momentum(gait)
         ax.plot(t, h, LINE_STYLES[gait.mode], label=f"{gait.mode}, alpha = {math.degrees(gait.arm_amplitude):.1f} deg")
-    ax.axvline(normal.period, color="grey", linewidth=0.8)
+    ax.axvline(optimum.period, color="grey", linewidth=0.8)
     ax.axhline(0.0, color="grey", linewidth=0.5)
     ax.set_xlabel("time t (s)  (double support at t = T)")
     ax.set_ylabel("yaw angular momentum about the stance foot (kg m^2/s)")
-    ax.set_title(f"Two steps, L = {normal.step_length:g} m, T = {normal.period:g} s, params {normal.params}")
+    ax.set_title(f"Two steps, L = {optimum.step_length:g} m, T = {optimum.period:g} s, params {optimum.params}")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")
     return fig
 
 
+def skeleton(model: BipedModel, q: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, str]]:
+    """The biped's segments at configuration ``q`` of the single-support model (m; stance tip at
+    the origin): (start, end, part) from each joint to its parent's, the swing shin to its tip,
+    and each arm (``part``: 'arm' or 'body')."""
+    pin_model, data = model.single, model.single_data
+    pin.forwardKinematics(pin_model, data, q)
+    pin.updateFramePlacements(pin_model, data)
+    segments = []
+    for joint in range(2, pin_model.njoints):
+        start = data.oMi[pin_model.parents[joint]].translation.copy()
+        segments.append((start, data.oMi[joint].translation.copy(), "body"))
+        if "shoulder" in pin_model.names[joint]:
+            hand = data.oMi[joint].act(np.array([0.0, 0.0, -model.params.arm.length]))
+            segments.append((data.oMi[joint].translation.copy(), hand, "arm"))
+    knee = pin_model.getJointId("swing_knee")
+    segments.append((data.oMi[knee].translation.copy(), data.oMf[pin_model.getFrameId(SWING_TIP)].translation.copy(), "body"))
+    return segments
+
+
+def _draw_skeletons(ax, model: BipedModel, gait: Gait, snapshots: int = 5) -> None:
+    """The biped seen from the side (x forward, z up, m) at ``snapshots`` instants of the step."""
+    samples = gait.figures.samples
+    for k, index in enumerate(np.linspace(0, len(samples.t) - 1, snapshots).round().astype(int)):
+        colour = colormaps["viridis"](k / max(1, snapshots - 1))
+        for n, (start, end, part) in enumerate(skeleton(model, samples.q[index])):
+            ax.plot([start[0], end[0]], [start[2], end[2]], color=colour, linewidth=2.6 if part == "arm" else 1.6,
+                    solid_capstyle="round", label=f"t = {samples.t[index]:.2f} s" if n == 0 else None)
+    ax.axhline(0.0, color="grey", linewidth=0.8)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x, forward (m)")
+    ax.set_ylabel("z, up (m)")
+    ax.set_title("the step from the side (arms thicker)", fontsize="medium")
+    ax.legend(fontsize="x-small", loc="upper left")
+
+
+def plan_figure(gait: Gait, model: BipedModel) -> Figure:
+    """The ballistic step of a planned gait over t in [0, T]: the biped from the side at five
+    instants (``model``: the planner's), the joint angles (deg), the vertical ground reaction (N)
+    and the friction ratio |F_xy| / F_z against the coefficient, the yaw angular momentum about
+    the stance foot (kg m^2/s)."""
+    fig = Figure(figsize=(14.0, 4.8), layout="constrained")
+    FigureCanvasAgg(fig)
+    side, angles, reaction, momentum = (fig.add_subplot(1, 4, k + 1) for k in range(4))
+    title = (f"L = {gait.step_length:g} m, T = {gait.period:g} s, alpha = {math.degrees(gait.arm_amplitude):.1f} deg, "
+             f"{gait.mode}, params {gait.params}: {'admissible' if gait.admissible else 'not admissible'}")
+    fig.suptitle(title, fontsize="medium")
+    if gait.figures is None or gait.figures.samples is None:
+        angles.text(0.5, 0.5, "no converged step", transform=angles.transAxes, ha="center")
+        return fig
+    _draw_skeletons(side, model, gait)
+    t, q, grf = gait.figures.samples.t, gait.figures.samples.q, gait.figures.grf
+    for name, column in zip(gait.names.joints, q.T):
+        angles.plot(t, np.degrees(column), label=name.replace("_", " "))
+    angles.set_ylabel("joint angle (deg)")
+    angles.legend(fontsize="xx-small", ncols=3, loc="upper center", bbox_to_anchor=(0.5, -0.16))
+    reaction.plot(t, grf[:, 2], color="C0")
+    reaction.set_ylabel("vertical ground reaction F_z (N)", color="C0")
+    ratio = reaction.twinx()
+    ratio.plot(t, np.hypot(grf[:, 0], grf[:, 1]) / grf[:, 2], color="C3")
+    mu = gait.problem.options.friction
+    if math.isfinite(mu):
+        ratio.axhline(mu, color="C3", linestyle=":", linewidth=1.0, label=f"mu = {mu:g}")
+        ratio.legend(fontsize="small", loc="lower right")
+    ratio.set_ylabel("friction ratio |F_xy| / F_z", color="C3")
+    momentum.plot(t, gait.figures.h_vertical, color="C2")
+    momentum.axhline(0.0, color="grey", linewidth=0.5)
+    momentum.set_ylabel("yaw momentum about the stance foot (kg m^2/s)")
+    for ax in (angles, reaction, momentum):
+        ax.set_xlabel("time in the step t (s)")
+        ax.grid(True, alpha=0.3)
+    return fig
+
+
 def sweep_figures(results: Sequence[Gait], out_dir: Path) -> list[Path]:
     """The figures of a sweep in ``out_dir``; returns the paths: ``W_vs_alpha_L{L}_T{T}.png``
-    per (L, T) swept over two or more alphas, ``W_vs_T_L{L}_alpha{deg}.png`` per (L, alpha)
-    swept over two or more periods; if neither, the W-vs-alpha points per (L, T)."""
+    per (L, T) swept over two or more alphas; ``W_vs_T_L{L}.png`` per L swept over two or more
+    periods, one curve per alpha (``MAX_CURVES`` of them, evenly spaced, when more were swept);
+    if neither, the W-vs-alpha points per (L, T)."""
     def groups(key) -> dict[tuple, list[Gait]]:
         out: dict[tuple, list[Gait]] = {}
         for r in results:
@@ -157,15 +238,19 @@ def sweep_figures(results: Sequence[Gait], out_dir: Path) -> list[Path]:
         return len({getattr(r, field) for r in case})
 
     by_alpha = groups(lambda r: (r.step_length, r.period))
-    by_period = groups(lambda r: (r.step_length, r.arm_amplitude))
+    by_length = groups(lambda r: r.step_length)
+    periods_swept = any(count(case, "period") > 1 for case in by_length.values())
     paths = []
     for (length, period), case in by_alpha.items():
-        if count(case, "arm_amplitude") > 1 or all(count(c, "period") < 2 for c in by_period.values()):
+        if count(case, "arm_amplitude") > 1 or not periods_swept:
             title = f"W against alpha, L = {length:g} m, T = {period:g} s, params {case[0].params}"
             paths.append(save(effort_figure(case, title=title), out_dir / f"W_vs_alpha_L{length:.3f}_T{period:.3f}.png"))
-    for (length, alpha), case in by_period.items():
+    for length, case in by_length.items():
         if count(case, "period") > 1:
-            deg = math.degrees(alpha)
-            title = f"W against T, L = {length:g} m, alpha = {deg:.4g} deg, params {case[0].params}"
-            paths.append(save(period_figure(case, title=title), out_dir / f"W_vs_T_L{length:.3f}_alpha{deg:.2f}.png"))
+            alphas = sorted({r.arm_amplitude for r in case})
+            shown = [alphas[round(k)] for k in np.linspace(0, len(alphas) - 1, min(len(alphas), MAX_CURVES))]
+            note = f" ({len(shown)} of {len(alphas)} amplitudes)" if len(shown) < len(alphas) else ""
+            title = f"W against T, L = {length:g} m, params {case[0].params}{note}"
+            curves = [r for r in case if r.arm_amplitude in shown]
+            paths.append(save(period_figure(curves, title=title), out_dir / f"W_vs_T_L{length:.3f}.png"))
     return paths

@@ -42,13 +42,13 @@ def hips_lines(default: Study, hips: Study) -> list[str]:
     rows = []
     for case in FIG4_CASES:
         nine, thirteen = default.comparisons[case], hips.comparisons[case]
-        g9, g13 = nine.normal.gait, thirteen.normal.gait
+        g9, g13 = nine.optimum.gait, thirteen.optimum.gait
         k9, _, _, c9 = _shape(g9)
         k13, roll13, yaw13, c13 = _shape(g13)
         rows.append((case, nine, thirteen, g9, g13))
         lines.append(
             f"| {case[0]:.2f} | {case[1]:.2f} | {math.degrees(g9.arm_amplitude):.2f} / {math.degrees(g13.arm_amplitude):.2f} | "
-            f"{g9.W:.3f} / {g13.W:.3f} | {nine.anti_normal.W:.3f} / {thirteen.anti_normal.W:.3f} | "
+            f"{g9.W:.3f} / {g13.W:.3f} | {nine.other.W:.3f} / {thirteen.other.W:.3f} | "
             f"{g9.double_support.yaw_momentum_jump:.3f} / {g13.double_support.yaw_momentum_jump:.3f} | {g9.stability.spectral_radius:.0f} / "
             f"{g13.stability.spectral_radius:.0f} | {k9:.1f} / {k13:.2f} | {roll13:.1f}, {yaw13:.1f} | "
             f"{c9:.1f} / {c13:.1f} |")
@@ -61,9 +61,9 @@ def _reading(rows: Sequence[tuple]) -> list[str]:
     """What the hips' joints do, read off the table's rows."""
     w_ratio = [g13.W / g9.W for _, _, _, g9, g13 in rows]
     alpha_shift = [math.degrees(g13.arm_amplitude - g9.arm_amplitude) for _, _, _, g9, g13 in rows]
-    anti_ratio9 = [n.anti_normal.W / g9.W for _, n, _, g9, _ in rows]
-    anti_ratio13 = [t.anti_normal.W / g13.W for _, _, t, _, g13 in rows]
-    interior = all(t.normal.where == "interior minimum" for _, _, t, _, _ in rows)
+    anti_ratio9 = [n.other.W / g9.W for _, n, _, g9, _ in rows]
+    anti_ratio13 = [t.other.W / g13.W for _, _, t, _, g13 in rows]
+    interior = all(t.optimum.where == "interior minimum" for _, _, t, _, _ in rows)
     knee = max(_shape(g13)[0] for *_, g13 in rows)
     roll = max(_shape(g13)[1] for *_, g13 in rows)
     radius = [(g9.stability.spectral_radius, g13.stability.spectral_radius) for *_, g9, g13 in rows]

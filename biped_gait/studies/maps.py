@@ -3,11 +3,14 @@ points): the admissible region in the (L, T) plane with the condition that limit
 it, the lowest admissible period at each L, the optimal arm amplitude alpha*(L, T) and its
 effort W*(L, T), and the anti-normal / normal cost ratio at alpha*.
 
-The region comes from the gait atlas (normal gait, every alpha of the atlas): a node (L, T) is
+The maps are of one gait mode (normal by default; the cost ratio is the other mode's) and take
+the gait options: the region comes from that mode's gait atlas (every alpha of the atlas), seen
+through the margins asked (``Atlas.within``: nodes filtered, not rebuilt): a node (L, T) is
 admissible if the gait is at some alpha; otherwise it is marked with the condition that limits
-it at the most alphas. The boundary T_min(L) is found by bisection along T on the human-like
-branch (at ``BOUNDARY_ALPHA``). The optima are computed by ``optimize.optimal_arm_amplitude``
-on every other atlas node of the admissible region, in parallel on an executor.
+it at the most alphas, or as meeting the limits but not the margins. The boundary T_min(L) is
+found by bisection along T on the human-like branch (at ``BOUNDARY_ALPHA``), the optima by
+``optimize.optimal_arm_amplitude`` on every other atlas node of the admissible region, both with
+the options, in parallel on an executor.
 L in m, T in s, alpha in rad (figures and text in degrees), W in N m s.
 """
 
@@ -15,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass
 
@@ -29,39 +32,46 @@ from ..core.gait.admissibility import LIMIT_NAMES, Limit
 from ..core.gait.atlas import Atlas, NodeStatus, atlas_path
 from ..core.gait.configurations import GaitMode
 from ..core.model.params import BipedParams
-from ..core.gait.planner import GaitRequest
+from ..core.gait.planner import GaitRequest, validate_request
 from .executors import planner_for
-from .optimize import COARSE_STEP, NoAdmissibleGait, compare_modes
+from .optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, compare_modes
 
 BOUNDARY_ALPHA = math.radians(25.0)  # rad: near the optima of the default set
 ADMISSIBLE = "admissible"
-CATEGORIES = (ADMISSIBLE, *LIMIT_NAMES.values(), "backward-knee twin only")
-COLOURS = ("#4daf4a", "#999999", "#a65628", "#e41a1c", "#ff7f00", "#377eb8", "#984ea3", "#ffff33", "#f781bf")
+MARGINS_ONLY = "within the limits, not the margins"
+TWIN_ONLY = "backward-knee twin only"
+CATEGORIES = (ADMISSIBLE, *LIMIT_NAMES.values(), TWIN_ONLY, MARGINS_ONLY)
+COLOURS = ("#4daf4a", "#999999", "#a65628", "#e41a1c", "#ff7f00", "#377eb8", "#984ea3", "#ffff33", "#f781bf",
+           "#b3de69")
+NO_GAIT_COLOUR = "#d9d9d9"  # the stability map's nodes without an admissible gait
 
 
 @dataclass(frozen=True)
 class Optimum:
-    """The optimal normal gait at (L, T): alpha* (rad), W* (N m s), and the anti-normal gait's
-    W at alpha* (NaN if it is not admissible)."""
+    """The optimal gait of the maps' mode at (L, T): alpha* (rad), W* (N m s), and the other
+    mode's W at alpha* (NaN if that gait is not admissible)."""
 
     step_length: float
     period: float
     alpha: float
     W: float
-    anti_normal_W: float
+    other_W: float
     interior: bool
 
     @property
     def ratio(self) -> float:
-        return self.anti_normal_W / self.W
+        return self.other_W / self.W
 
 
 @dataclass(frozen=True)
 class WalkingMaps:
-    """The maps of one parameter set: the region per atlas (L, T) node (category names), the
-    boundary (L, T_min) pairs, and the optima on the coarser grid."""
+    """The maps of one parameter set and ``mode``: the region per atlas (L, T) node (category
+    names), the boundary (L, T_min) pairs, and the optima on the coarser grid; ``margins``
+    names the margins asked ('' if none)."""
 
     params: str
+    mode: GaitMode
+    margins: str
     step_lengths: np.ndarray
     periods: np.ndarray
     region: np.ndarray  # (L, T): index into CATEGORIES
@@ -71,7 +81,8 @@ class WalkingMaps:
 
 def region(atlas: Atlas) -> np.ndarray:
     """Per (L, T) node of ``atlas``: 0 if admissible at some alpha, else the index in
-    ``CATEGORIES`` of the condition that limits it at the most alphas."""
+    ``CATEGORIES`` of the condition that limits it at the most alphas (an inadmissible node with
+    no limit's condition meets the limits but not the margins ``atlas`` is seen through)."""
     status, limits = atlas.nodes["status"], atlas.nodes["limits"]
     out = np.zeros(status.shape[:2], dtype=int)
     for i, j in np.ndindex(*out.shape):
@@ -80,7 +91,9 @@ def region(atlas: Atlas) -> np.ndarray:
         votes: Counter[str] = Counter()
         for k in range(status.shape[2]):
             if status[i, j, k] == NodeStatus.TWIN_ONLY:
-                votes[CATEGORIES[-1]] += 1
+                votes[TWIN_ONLY] += 1
+            elif status[i, j, k] == NodeStatus.INADMISSIBLE and limits[i, j, k] == 0:
+                votes[MARGINS_ONLY] += 1
             for bit, name in LIMIT_NAMES.items():
                 if status[i, j, k] != NodeStatus.TWIN_ONLY and Limit(int(limits[i, j, k])) & bit:
                     votes[name] += 1
@@ -89,34 +102,46 @@ def region(atlas: Atlas) -> np.ndarray:
 
 
 def boundary_period(params: BipedParams, mode: GaitMode, step_length: float, low: float, high: float,
-                    alpha: float = BOUNDARY_ALPHA, tol: float = 1e-3) -> float:
+                    alpha: float = BOUNDARY_ALPHA, tol: float = 1e-3, options: Mapping[str, object] | None = None) -> float:
     """The lowest admissible T (s) in [low, high] at L (m) and alpha (rad), by bisection on the
-    planner's verdict (``high`` admissible, ``low`` not), to ``tol`` s."""
+    planner's verdict (``high`` admissible, ``low`` not), to ``tol`` s; ``options``: further
+    ``GaitRequest`` fields."""
     planner = planner_for(params)
     while high - low > tol:
         middle = 0.5 * (low + high)
-        if planner.plan(GaitRequest(step_length, middle, alpha, mode)).admissible:
+        if planner.plan(GaitRequest(step_length, middle, alpha, mode, **(options or {}))).admissible:
             high = middle
         else:
             low = middle
     return high
 
 
-def _optimum(params: BipedParams, step_length: float, period: float, coarse_step: float) -> Optimum | None:
-    """Worker entry: the optimum at (L, T) and the anti-normal gait there (alpha bracketed every
-    ``coarse_step`` rad); None if no gait of the range is admissible."""
+def _optimum(params: BipedParams, step_length: float, period: float, coarse_step: float,
+             alpha_range: tuple[float, float], options: Mapping[str, object] | None, mode: GaitMode) -> Optimum | None:
+    """Worker entry: the optimum of ``mode`` at (L, T) on ``alpha_range`` (rad, bracketed every
+    ``coarse_step`` rad) and the other mode's gait there; None if no gait of the range is admissible."""
     try:
-        comparison = compare_modes(params, step_length, period, coarse_step=coarse_step)
+        comparison = compare_modes(params, step_length, period, alpha_range, coarse_step, options, mode)
     except NoAdmissibleGait:
         return None
-    normal, anti = comparison.normal, comparison.anti_normal
-    return Optimum(step_length, period, normal.alpha, normal.W, anti.W if anti.usable else math.nan, normal.interior)
+    optimum, other = comparison.optimum, comparison.other
+    return Optimum(step_length, period, optimum.alpha, optimum.W, other.W if other.usable else math.nan,
+                   optimum.interior)
 
 
-def compute_maps(params: BipedParams, executor: Executor, stride: int = 2, coarse_step: float = COARSE_STEP) -> WalkingMaps:
-    """The maps of ``params`` from its current normal-gait atlas; optima on every ``stride``-th
-    node of the admissible region (alpha bracketed every ``coarse_step`` rad), on ``executor``."""
-    atlas = Atlas.load(atlas_path(params, GaitMode.NORMAL), params)
+def compute_maps(params: BipedParams, executor: Executor, stride: int = 2, coarse_step: float = COARSE_STEP,
+                 alpha_range: tuple[float, float] = ALPHA_RANGE, options: Mapping[str, object] | None = None,
+                 mode: GaitMode | str = GaitMode.NORMAL) -> WalkingMaps:
+    """The maps of ``params`` and ``mode`` from its current atlas seen through the margins of
+    ``options`` (further ``GaitRequest`` fields of every gait); optima on every ``stride``-th node
+    of the admissible region (``alpha_range`` rad, bracketed every ``coarse_step`` rad), on
+    ``executor``. ``ValueError`` for options the planner refuses."""
+    mode = GaitMode.parse(mode)
+    options = dict(options or {})
+    problem = validate_request(GaitRequest(0.45, 0.45, alpha_range[0], mode, **options), params)
+    atlas = Atlas.load(atlas_path(params, mode), params)
+    if problem.margins:
+        atlas = atlas.within(problem.margins, problem.options.friction)
     grid = atlas.grid
     cells = region(atlas)
     boundary_tasks = {}
@@ -124,14 +149,16 @@ def compute_maps(params: BipedParams, executor: Executor, stride: int = 2, coars
         row = np.flatnonzero(cells[i] == 0)
         if row.size and row[0] > 0:
             boundary_tasks[float(length)] = executor.submit(
-                boundary_period, params, GaitMode.NORMAL, float(length), float(grid.periods[row[0] - 1]),
-                float(grid.periods[row[0]]))
-    optimum_tasks = [executor.submit(_optimum, params, float(grid.step_lengths[i]), float(grid.periods[j]), coarse_step)
+                boundary_period, params, mode, float(length), float(grid.periods[row[0] - 1]),
+                float(grid.periods[row[0]]), options=options)
+    optimum_tasks = [executor.submit(_optimum, params, float(grid.step_lengths[i]), float(grid.periods[j]), coarse_step,
+                                     alpha_range, options, mode)
                      for i in range(0, len(grid.step_lengths), stride) for j in range(0, len(grid.periods), stride)
                      if cells[i, j] == 0]
     boundary = [(length, future.result()) for length, future in boundary_tasks.items()]
     optima = [o for o in (f.result() for f in optimum_tasks) if o is not None]
-    return WalkingMaps(params.name, grid.step_lengths, grid.periods, cells, boundary, optima)
+    return WalkingMaps(params.name, mode, problem.margins.text(problem.options.rate_bound), grid.step_lengths,
+                       grid.periods, cells, boundary, optima)
 
 
 # Figures -------------------------------------------------------------------------------------
@@ -162,45 +189,69 @@ def region_figure(maps: WalkingMaps) -> Figure:
         handles.append(line)
     ax.set_xlabel("step length L (m)")
     ax.set_ylabel("period T (s)")
-    ax.set_title(f"Where walking is possible, params {maps.params}\n(normal gait, some alpha in [0, 45] deg)",
-                 fontsize="medium")
+    margins = f"; margins: {maps.margins}" if maps.margins else ""
+    ax.set_title(f"Where walking is possible, params {maps.params}\n({maps.mode} gait, some alpha in [0, 45] deg"
+                 f"{margins})", fontsize="medium")
     fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2)
     return fig
 
 
-def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure) -> None:
+def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure, digits: int = 1,
+                 mark_ends: bool = False) -> list:
+    """Tiles of ``values`` at the optima's (L, T), each with its value in ``digits`` decimals
+    (as many as the colour bar's range needs to tell the tiles apart), dark text on light tiles;
+    ``mark_ends``: outline the tiles whose least W is at an end of the alpha range (no interior
+    minimum). Returns the legend handle of the outline (empty list if none)."""
     lengths = [o.step_length for o in maps.optima]
     periods = [o.period for o in maps.optima]
-    points = ax.scatter(lengths, periods, c=values, s=260, marker="s", cmap="viridis")
+    points = ax.scatter(lengths, periods, c=values, s=420, marker="s", cmap="viridis")
     for x, y, v in zip(lengths, periods, values):
-        ax.annotate(f"{v:.1f}" if math.isfinite(v) else "-", (x, y), ha="center", va="center", fontsize=6, color="white")
+        red, green, blue, _ = points.cmap(points.norm(v)) if math.isfinite(v) else (0, 0, 0, 1)
+        light = 0.299 * red + 0.587 * green + 0.114 * blue > 0.55
+        ax.annotate(f"{v:.{digits}f}" if math.isfinite(v) else "-", (x, y), ha="center", va="center", fontsize=7.5,
+                    color="black" if light else "white", fontweight="bold")
+    ends = [(o.step_length, o.period) for o in maps.optima if not o.interior]
+    handles = []
+    if mark_ends and ends:
+        handles.append(ax.scatter(*zip(*ends), s=420, marker="s", facecolors="none", edgecolors="#e41a1c",
+                                  linewidths=1.8, label="least W at an end of the alpha range (no interior minimum)"))
     fig.colorbar(points, ax=ax, label=label)
     ax.set_xlabel("step length L (m)")
     ax.set_ylabel("period T (s)")
+    return handles
 
 
 def optimum_figure(maps: WalkingMaps) -> Figure:
-    """alpha*(L, T) (deg) and W*(L, T) (N m s) of the normal gait over the admissible region."""
+    """alpha*(L, T) (deg) and W*(L, T) (N m s) of the maps' mode over the admissible region, the
+    tiles without an interior minimum (alpha* at an end of the range) outlined."""
     fig, (left, right) = _figure(2)
-    _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima], "optimal arm amplitude alpha* (deg)", fig)
-    _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig)
-    left.set_title(f"alpha*(L, T), params {maps.params}", fontsize="medium")
-    right.set_title(f"W*(L, T), params {maps.params}", fontsize="medium")
+    fig.set_size_inches(12.0, 5.2)
+    ends = _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima], "optimal arm amplitude alpha* (deg)",
+                        fig, mark_ends=True)
+    _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True)
+    if ends:
+        fig.legend(handles=ends, fontsize="small", loc="outside lower center")
+    left.set_title(f"alpha*(L, T), {maps.mode} gait, params {maps.params}", fontsize="medium")
+    right.set_title(f"W*(L, T), {maps.mode} gait, params {maps.params}", fontsize="medium")
     return fig
 
 
 def ratio_figure(maps: WalkingMaps) -> Figure:
-    """W of the anti-normal gait over W of the normal gait, both at the normal gait's alpha*."""
+    """W of the other mode's gait over W of the maps' mode, both at the latter's alpha*."""
+    other = GaitMode.ANTI_NORMAL if maps.mode is GaitMode.NORMAL else GaitMode.NORMAL
     fig, [ax] = _figure()
-    _scatter_map(ax, maps, [o.ratio for o in maps.optima], "W anti-normal / W normal at alpha*", fig)
-    ax.set_title(f"Cost of the anti-normal arm swing, params {maps.params}", fontsize="medium")
+    fig.set_size_inches(6.4, 5.2)
+    _scatter_map(ax, maps, [o.ratio for o in maps.optima], f"W {other} / W {maps.mode} at alpha*", fig, digits=2)
+    ax.set_title(f"Cost of the {other} arm swing, params {maps.params}", fontsize="medium")
     return fig
 
 
 def stability_figure(atlas: Atlas, alpha: float = BOUNDARY_ALPHA) -> Figure:
     """The open-loop spectral radius of the Poincare map over (L, T), at the atlas alpha nearest
-    ``alpha`` (rad), on the admissible nodes (log scale)."""
+    ``alpha`` (rad), on the admissible nodes (log scale); the nodes without an admissible gait
+    (nothing to measure) in grey, as the legend says."""
     fig, [ax] = _figure()
+    ax.set_facecolor(NO_GAIT_COLOUR)
     k = int(np.argmin(np.abs(atlas.grid.alphas - alpha)))
     radius = np.where(atlas.nodes["status"][:, :, k] == NodeStatus.ADMISSIBLE, atlas.nodes["spectral_radius"][:, :, k],
                       np.nan)
@@ -210,6 +261,8 @@ def stability_figure(atlas: Atlas, alpha: float = BOUNDARY_ALPHA) -> Figure:
     ax.set_ylabel("period T (s)")
     ax.set_title(f"Open-loop spectral radius, alpha = {math.degrees(atlas.grid.alphas[k]):g} deg, params "
                  f"{atlas.params}", fontsize="medium")
+    fig.legend(handles=[Patch(color=NO_GAIT_COLOUR, label="no admissible gait at this alpha (not measured)")],
+               fontsize="small", loc="outside lower center")
     return fig
 
 
@@ -224,7 +277,9 @@ def reading(maps: WalkingMaps) -> list[str]:
     limit_text = ", ".join(f"{name} at {n}" for name, n in limits.most_common()) or "none"
     lines.append(f"- **Region.** {admissible} of {total} (L, T) nodes of the atlas (L {maps.step_lengths[0]:g} to "
                  f"{maps.step_lengths[-1]:g} m, T {maps.periods[0]:g} to {maps.periods[-1]:g} s) have an admissible "
-                 f"normal gait at some alpha in [0, 45] deg. Where none is, the limit is: {limit_text} nodes.")
+                 f"{maps.mode} gait at some alpha in [0, 45] deg"
+                 + (f" within the margins ({maps.margins})" if maps.margins else "")
+                 + f". Where none is, the limit is: {limit_text} nodes.")
     if maps.boundary:
         periods = np.array([t for _, t in maps.boundary])
         lines.append(f"- **Lowest admissible period** at alpha = {math.degrees(BOUNDARY_ALPHA):g} deg: T_min from "
@@ -242,10 +297,11 @@ def reading(maps: WalkingMaps) -> list[str]:
                      + _trend(maps.optima))
         ratios = np.array([o.ratio for o in maps.optima])
         finite = ratios[np.isfinite(ratios)]
+        other = GaitMode.ANTI_NORMAL if maps.mode is GaitMode.NORMAL else GaitMode.NORMAL
         if finite.size:
-            lines.append(f"- **Anti-normal swing** costs {finite.min():.3f} to {finite.max():.3f} times the normal "
-                         f"gait's W at alpha* ({int(np.sum(finite > 1))} of {finite.size} points above 1"
-                         + (f"; {ratios.size - finite.size} anti-normal gaits not admissible" if finite.size < ratios.size else "")
+            lines.append(f"- **{other.value.capitalize()} swing** costs {finite.min():.3f} to {finite.max():.3f} times "
+                         f"the {maps.mode} gait's W at alpha* ({int(np.sum(finite > 1))} of {finite.size} points above 1"
+                         + (f"; {ratios.size - finite.size} {other} gaits not admissible" if finite.size < ratios.size else "")
                          + ").")
     return lines
 

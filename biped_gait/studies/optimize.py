@@ -175,10 +175,11 @@ def _refine(
 
 @dataclass(frozen=True)
 class ModeComparison:
-    """The normal gait's optimum and the anti-normal gait at the same alpha (full gaits)."""
+    """The optimum of one mode (``optimum``, the normal gait's in the paper's comparison) and
+    the other mode's gait at the same alpha (``other``; full gaits)."""
 
-    normal: ArmOptimum
-    anti_normal: Gait
+    optimum: ArmOptimum
+    other: Gait
 
 
 def compare_modes(
@@ -188,13 +189,14 @@ def compare_modes(
     alpha_range: tuple[float, float] = ALPHA_RANGE,
     coarse_step: float = COARSE_STEP,
     options: Mapping[str, object] | None = None,
+    mode: GaitMode | str = GaitMode.NORMAL,
 ) -> ModeComparison:
-    """Worker entry: optimize the normal gait at L (m), T (s), then solve the anti-normal gait
-    at its alpha (the paper's comparison), with this worker's planner for ``params``;
-    ``options``: further ``GaitRequest`` fields of every gait."""
+    """Worker entry: optimize the gait of ``mode`` (default normal) at L (m), T (s), then solve
+    the other mode's gait at its alpha (the paper's comparison), with this worker's planner for
+    ``params``; ``options``: further ``GaitRequest`` fields of every gait."""
     planner = planner_for(params)
-    normal = optimal_arm_amplitude(planner, step_length, period, GaitMode.NORMAL, alpha_range, coarse_step,
-                                   options=options)
-    [anti] = solve_chain(planner, step_length, period, GaitMode.ANTI_NORMAL.value, (normal.alpha,), options=options)
-    return ModeComparison(normal, anti)
-
+    mode = GaitMode.parse(mode)
+    other = GaitMode.ANTI_NORMAL if mode is GaitMode.NORMAL else GaitMode.NORMAL
+    optimum = optimal_arm_amplitude(planner, step_length, period, mode, alpha_range, coarse_step, options=options)
+    [gait] = solve_chain(planner, step_length, period, other.value, (optimum.alpha,), options=options)
+    return ModeComparison(optimum, gait)

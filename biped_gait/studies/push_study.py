@@ -22,7 +22,7 @@ import csv
 import json
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -132,10 +132,12 @@ def largest_push(hybrid: HybridStep, orbit: PlannedOrbit, direction: str, angle:
 
 
 def push_task(params: BipedParams, step_length: float, period: float, alpha: float, mode: str, direction: str,
-              phase: float = PHASE, steering: float | None = DEFAULT_RATE) -> PushLimit:
-    """Worker entry: plan the gait with this worker's planner, then ``largest_push``."""
+              phase: float = PHASE, steering: float | None = DEFAULT_RATE,
+              options: Mapping[str, object] | None = None) -> PushLimit:
+    """Worker entry: plan the gait (``options``: further ``GaitRequest`` fields) with this
+    worker's planner, then ``largest_push``."""
     planner = planner_for(params)
-    gait = planner.plan(GaitRequest(step_length, period, alpha, mode))
+    gait = planner.plan(GaitRequest(step_length, period, alpha, mode, **(options or {})))
     if not gait.admissible:
         raise ValueError(f"the gait L = {step_length:g} m, T = {period:g} s, alpha = {math.degrees(alpha):.2f} deg "
                          f"({mode}) is not admissible: {'; '.join(gait.reasons)}")
@@ -144,12 +146,14 @@ def push_task(params: BipedParams, step_length: float, period: float, alpha: flo
 
 def run_push_study(executor: Executor, params: BipedParams, step_length: float, period: float, mode: str,
                    cases: Sequence[tuple[float, str]], phase: float = PHASE,
-                   steering: float | None = DEFAULT_RATE) -> list[PushLimit]:
+                   steering: float | None = DEFAULT_RATE, options: Mapping[str, object] | None = None) -> list[PushLimit]:
     """``largest_push`` for each (alpha rad, direction name) of ``cases``, all at once on
-    ``executor``, with a progress bar on stderr; in the order of ``cases``."""
+    ``executor``, with a progress bar on stderr; in the order of ``cases``; ``options``: further
+    ``GaitRequest`` fields of the gait."""
     from tqdm import tqdm
 
-    futures = {executor.submit(push_task, params, step_length, period, alpha, mode, direction, phase, steering): k
+    futures = {executor.submit(push_task, params, step_length, period, alpha, mode, direction, phase, steering,
+                               options): k
                for k, (alpha, direction) in enumerate(cases)}
     results: list[PushLimit | None] = [None] * len(cases)
     with tqdm(total=len(futures), unit="direction", desc="push study", file=sys.stderr) as bar:
@@ -179,6 +183,13 @@ def limit_record(limit: PushLimit) -> dict:
     return record
 
 
+def document(limits: Sequence[PushLimit]) -> dict:
+    """The study as JSON-ready values (``push.json``): the recovery criterion and every limit
+    with its trials."""
+    return {"recovery_steps": RECOVERY_STEPS, "recovery_tolerance": RECOVERY_TOLERANCE,
+            "limits": [limit_record(limit) for limit in limits]}
+
+
 def write_results(limits: Sequence[PushLimit], out: Path) -> list[Path]:
     """``push.csv`` (one row a direction and alpha) and ``push.json`` (with every trial) in ``out``."""
     out.mkdir(parents=True, exist_ok=True)
@@ -188,8 +199,7 @@ def write_results(limits: Sequence[PushLimit], out: Path) -> list[Path]:
         writer = csv.DictWriter(f, fieldnames=columns)
         writer.writeheader()
         writer.writerows({c: r[c] for c in columns} for r in records)
-    (out / "push.json").write_text(json.dumps({"recovery_steps": RECOVERY_STEPS, "recovery_tolerance": RECOVERY_TOLERANCE,
-                                               "limits": records}, indent=1))
+    (out / "push.json").write_text(json.dumps(document(limits), indent=1))
     return [out / "push.csv", out / "push.json"]
 
 

@@ -36,8 +36,8 @@ def _readings_table(readings: Readings) -> list[str]:
     paper_w = " | ".join(f"{PAPER_W[L][0]:.2f} / {PAPER_W[L][1]:.2f}" for L, _ in PAPER_POINTS)
     lines.append(f"| the paper | {paper} | {paper_w} |")
     for label, comparisons in readings.comparisons.items():
-        alphas = " | ".join(f"{math.degrees(c.normal.alpha):.2f}" for c in comparisons)
-        efforts = " | ".join(f"{c.normal.W:.2f} / {c.anti_normal.W:.2f}" for c in comparisons)
+        alphas = " | ".join(f"{math.degrees(c.optimum.alpha):.2f}" for c in comparisons)
+        efforts = " | ".join(f"{c.optimum.W:.2f} / {c.other.W:.2f}" for c in comparisons)
         lines.append(f"| {label} | {alphas} | {efforts} |")
     return lines
 
@@ -57,10 +57,10 @@ def reviewer_lines(checks: ReviewerChecks, rate_figure: str) -> list[str]:
     comparisons = checks.readings.comparisons
     labels = list(READINGS)
     cone, free, absolute_free = comparisons[labels[0]], comparisons[labels[1]], comparisons[labels[2]]
-    rise = [100 * (c.normal.W / f.normal.W - 1) for c, f in zip(cone, free)]
-    rise_anti = [100 * (c.anti_normal.W / f.anti_normal.W - 1) for c, f in zip(cone, free)]
-    need_normal = _impulse_friction([c.normal.gait for c in free])
-    need_anti = _impulse_friction([c.anti_normal for c in free])
+    rise = [100 * (c.optimum.W / f.optimum.W - 1) for c, f in zip(cone, free)]
+    rise_anti = [100 * (c.other.W / f.other.W - 1) for c, f in zip(cone, free)]
+    need_normal = _impulse_friction([c.optimum.gait for c in free])
+    need_anti = _impulse_friction([c.other for c in free])
     lines = ["", "## The physics a reviewer would check (beyond the paper)", "",
              "### The friction cone, and the effort's reading", "",
              "The double support's reaction impulses must stay in the floor's friction cone (coefficient mu = 0.5 "
@@ -74,12 +74,12 @@ def reviewer_lines(checks: ReviewerChecks, rate_figure: str) -> list[str]:
               f"{min(rise_anti):.1f} to {max(rise_anti):.1f} % (anti-normal): the anti-normal swing leans on friction "
               "a floor does not give.",
               "- With the cone, the joint reading puts the optimal alpha at "
-              + ", ".join(f"{math.degrees(c.normal.alpha):.1f}" for c in cone)
+              + ", ".join(f"{math.degrees(c.optimum.alpha):.1f}" for c in cone)
               + " deg against the paper's " + ", ".join(f"{PAPER_OPTIMA[L]:g}" for L, _ in PAPER_POINTS)
               + " deg; without the cone the absolute reading does too ("
-              + ", ".join(f"{math.degrees(c.normal.alpha):.1f}" for c in absolute_free)
+              + ", ".join(f"{math.degrees(c.optimum.alpha):.1f}" for c in absolute_free)
               + " deg), the joint reading does not ("
-              + ", ".join(f"{math.degrees(c.normal.alpha):.1f}" for c in free) + " deg).", ""]
+              + ", ".join(f"{math.degrees(c.optimum.alpha):.1f}" for c in free) + " deg).", ""]
     unbounded = next((w, r) for b, w, r in checks.rate_curve if not math.isfinite(b))
     feasible = [(b, w) for b, w, _ in checks.rate_curve if math.isfinite(b) and math.isfinite(w)]
     infeasible = [b for b, w, _ in checks.rate_curve if math.isfinite(b) and not math.isfinite(w)]
@@ -92,8 +92,8 @@ def reviewer_lines(checks: ReviewerChecks, rate_figure: str) -> list[str]:
               + (f"; below {min(b for b, _ in feasible):g} rad/s ({', '.join(f'{b:g}' for b in infeasible)}) the "
                  "double support has no solution." if infeasible else "."), "",
               f"![Effort against the joint-rate bound]({rate_figure})", ""]
-    ratio = [PAPER_W[L][0] / c.normal.W for (L, _), c in zip(PAPER_POINTS, cone)]
-    ratio_abs = [PAPER_W[L][0] / c.normal.W for (L, _), c in zip(PAPER_POINTS, absolute_free)]
+    ratio = [PAPER_W[L][0] / c.optimum.W for (L, _), c in zip(PAPER_POINTS, cone)]
+    ratio_abs = [PAPER_W[L][0] / c.optimum.W for (L, _), c in zip(PAPER_POINTS, absolute_free)]
     lines += ["### Why the paper's W is not reproduced", "",
               "The paper's 42 impulse equations have rank 41: the angular momentum of the locked biped about the "
               "foot-to-foot line is conserved through the double support (no joint impulse excites that rotation and "

@@ -6,7 +6,7 @@ same amplitude (the paper's table and Fig. 5). L in m, T in s, alpha in rad.
 from __future__ import annotations
 
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field
 
@@ -37,8 +37,9 @@ class Study:
     comparisons: dict[tuple[float, float], ModeComparison] = field(default_factory=dict)
 
     def fig4_optima(self) -> list[ArmOptimum]:
-        """The normal gait's optimum for each Fig. 4 step length that was computed."""
-        return [self.comparisons[case].normal for case in FIG4_CASES if case in self.comparisons]
+        """The optimum (of the normal gait, unless another mode was asked) for each Fig. 4 step
+        length that was computed."""
+        return [self.comparisons[case].optimum for case in FIG4_CASES if case in self.comparisons]
 
     def fig4(self) -> Figure:
         """Fig. 4: W against alpha for L = 0.40, 0.45, 0.50 m at T = 0.45 s, optima marked."""
@@ -46,15 +47,19 @@ class Study:
         return effort_figure(self.curves, self.fig4_optima(), title)
 
     def fig5(self) -> Figure:
-        """Fig. 5: yaw momentum over two steps at L = T = 0.45, the normal gait's optimal alpha."""
+        """Fig. 5: yaw momentum over two steps at L = T = 0.45, both modes at the optimal alpha
+        (of the normal gait, unless another mode was asked)."""
         comparison = self.comparisons[FIG5_CASE]
-        return momentum_figure(comparison.normal.gait, comparison.anti_normal)
+        return momentum_figure(comparison.optimum.gait, comparison.other)
 
 
-def fig4_grid(params: BipedParams, coarse_step: float = COARSE_STEP) -> SweepGrid:
-    """The Fig. 4 sweep: three step lengths, T = 0.45 s, alpha over 0..45 deg, both modes."""
-    alphas = inclusive_range(*ALPHA_RANGE, coarse_step, "arm amplitude")
-    return SweepGrid.build(params, FIG4_STEP_LENGTHS, (PAPER_PERIOD,), alphas, [m.value for m in GaitMode])
+def fig4_grid(params: BipedParams, coarse_step: float = COARSE_STEP, alpha_range: tuple[float, float] = ALPHA_RANGE,
+              options: Mapping[str, object] | None = None) -> SweepGrid:
+    """The Fig. 4 sweep: three step lengths, T = 0.45 s, alpha over ``alpha_range`` (rad, 0..45
+    deg) every ``coarse_step``, both modes, each gait with the ``GaitRequest`` fields ``options``."""
+    alphas = inclusive_range(*alpha_range, coarse_step, "arm amplitude")
+    return SweepGrid.build(params, FIG4_STEP_LENGTHS, (PAPER_PERIOD,), alphas, [m.value for m in GaitMode],
+                           options=options)
 
 
 def run_study(
@@ -63,19 +68,24 @@ def run_study(
     cases: Sequence[tuple[float, float]] = TABLE_CASES,
     curves: bool = True,
     coarse_step: float = COARSE_STEP,
+    alpha_range: tuple[float, float] = ALPHA_RANGE,
+    options: Mapping[str, object] | None = None,
+    mode: GaitMode | str = GaitMode.NORMAL,
 ) -> list[Study]:
     """Compute the study for each parameter set, all tasks at once on ``executor``, with a
-    progress bar on stderr. ``cases`` are the (L, T) of the mode comparisons; ``curves`` adds
-    the Fig. 4 sweep; ``coarse_step`` (rad) is the alpha spacing of sweeps and brackets;
-    every chain starts from the gait the planner finds (atlas, continuation)."""
+    progress bar on stderr. ``cases`` are the (L, T) of the mode comparisons (``mode``'s
+    optimum, the other mode at its alpha); ``curves`` adds the Fig. 4 sweep; ``alpha_range``
+    (rad) is searched with ``coarse_step`` (rad) the alpha spacing of sweeps and brackets;
+    ``options`` are further ``GaitRequest`` fields of every gait; every chain starts from the
+    gait the planner finds (atlas, continuation)."""
     studies = [Study(params) for params in params_sets]
     tasks = {}
     for study in studies:
         if curves:
-            for chain in fig4_grid(study.params, coarse_step).chains():
+            for chain in fig4_grid(study.params, coarse_step, alpha_range, options).chains():
                 tasks[executor.submit(run_chain, chain)] = (study, None)
         for case in cases:
-            future = executor.submit(compare_modes, study.params, *case, ALPHA_RANGE, coarse_step)
+            future = executor.submit(compare_modes, study.params, *case, alpha_range, coarse_step, options, mode)
             tasks[future] = (study, case)
     with tqdm(total=len(tasks), unit="task", desc="study", file=sys.stderr) as bar:
         for future in as_completed(tasks):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -22,7 +22,6 @@ from ..core.gait.configurations import GaitMode
 from .executors import planner_for
 from ..core.gait.planner import GaitPlanner, GaitRequest, validate_request
 from ..core.model.params import BipedParams
-from ..core.dynamics.settings import DEFAULTS
 from ..core.gait.gait import Gait
 
 MAX_CASES = 2000  # a larger sweep must be confirmed (CLI: --yes)
@@ -50,24 +49,28 @@ def inclusive_range(start: float, stop: float, step: float, what: str) -> tuple[
 
 @dataclass(frozen=True)
 class Chain:
-    """One continuation chain: L (m), T (s), mode and the ascending alpha grid (rad)."""
+    """One continuation chain: L (m), T (s), mode and the ascending alpha grid (rad), with the
+    further ``GaitRequest`` fields of every gait (``options``: friction, margins, ...)."""
 
     params: BipedParams
     step_length: float
     period: float
     mode: str
     alphas: tuple[float, ...]
+    options: Mapping[str, object] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
 class SweepGrid:
-    """The cases of a sweep: every combination of L (m), T (s), mode and alpha (rad)."""
+    """The cases of a sweep: every combination of L (m), T (s), mode and alpha (rad), each gait
+    with the further ``GaitRequest`` fields ``options``."""
 
     params: BipedParams
     step_lengths: tuple[float, ...]
     periods: tuple[float, ...]
     alphas: tuple[float, ...]
     modes: tuple[str, ...]
+    options: Mapping[str, object] = field(default_factory=dict)
 
     @classmethod
     def build(
@@ -78,8 +81,10 @@ class SweepGrid:
         alphas: Sequence[float],
         modes: Sequence[str],
         confirmed: bool = False,
+        options: Mapping[str, object] | None = None,
     ) -> "SweepGrid":
-        """Check and normalize a grid: duplicates removed, alphas ascending, mode names parsed.
+        """Check and normalize a grid: duplicates removed, alphas ascending, mode names parsed;
+        ``options``: further ``GaitRequest`` fields of every gait.
 
         Raises ``ValueError`` (one line) for an empty axis, an unknown mode, a value the gait
         problem refuses, or more than ``MAX_CASES`` cases unless ``confirmed``.
@@ -94,12 +99,13 @@ class SweepGrid:
             periods=tuple(dict.fromkeys(float(v) for v in periods)),
             alphas=tuple(sorted(set(float(v) for v in alphas))),
             modes=tuple(dict.fromkeys(GaitMode.parse(m).value for m in modes)),
+            options=dict(options or {}),
         )
         if grid.size > MAX_CASES and not confirmed:
             raise ValueError(f"the sweep has {grid.size} cases (more than {MAX_CASES}): confirm to run it (--yes)")
         for chain in grid.chains():
             for alpha in (chain.alphas[0], chain.alphas[-1]):
-                validate_request(GaitRequest(chain.step_length, chain.period, alpha, chain.mode), params)
+                validate_request(GaitRequest(chain.step_length, chain.period, alpha, chain.mode, **chain.options), params)
         return grid
 
     @property
@@ -110,7 +116,7 @@ class SweepGrid:
     def chains(self) -> list[Chain]:
         """The continuation chains, in grid order (L, then T, then mode)."""
         return [
-            Chain(self.params, length, period, mode, self.alphas)
+            Chain(self.params, length, period, mode, self.alphas, self.options)
             for length in self.step_lengths
             for period in self.periods
             for mode in self.modes
@@ -124,6 +130,7 @@ class SweepGrid:
             "period_s": list(self.periods),
             "arm_amplitude_deg": [round(math.degrees(a), 9) for a in self.alphas],
             "modes": list(self.modes),
+            "options": dict(self.options),
             "cases": self.size,
         }
 
@@ -177,7 +184,8 @@ def predict(results: Sequence[Gait], alphas: Sequence[float], alpha: float) -> t
 
 def run_chain(chain: Chain) -> list[Gait]:
     """Worker entry: solve one chain with this worker's planner; results without their samples."""
-    results = solve_chain(planner_for(chain.params), chain.step_length, chain.period, chain.mode, chain.alphas)
+    results = solve_chain(planner_for(chain.params), chain.step_length, chain.period, chain.mode, chain.alphas,
+                          options=chain.options)
     return [result.without_samples() for result in results]
 
 

@@ -111,17 +111,20 @@ class SweepFiles:
         self._file.flush()
         self.chains[index] = results
 
-    def __exit__(self, exc_type: type | None, exc: BaseException | None, tb: TracebackType | None) -> None:
-        self._file.close()
-        if self.complete:
-            self.csv_path.write_text(_csv_text(None) + _csv_text(self.results()), newline="")
-        document = {
+    def document(self) -> dict:
+        """The sweep as JSON-ready values: whether it is complete, its grid, every gait so far."""
+        return {
             "complete": self.complete,
             "cases_planned": self.grid.size,
             "cases_written": self.count,
             "grid": self.grid.describe(),
             "cases": [case_record(r) for r in self.results()],
         }
+
+    def __exit__(self, exc_type: type | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        self._file.close()
+        if self.complete:
+            self.csv_path.write_text(_csv_text(None) + _csv_text(self.results()), newline="")
         partial = self.json_path.with_suffix(".json.part")
-        partial.write_text(json.dumps(document, indent=1))
+        partial.write_text(json.dumps(views.clean(self.document()), indent=1))
         os.replace(partial, self.json_path)

@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from ..core.gait.configurations import GaitMode
 from ..core.gait.gait import Gait
@@ -133,7 +134,7 @@ def compute_walking(executor: Executor, study: Study, alpha_step: float = ALPHA_
     closed loops and pushes every ``alpha_step`` (rad) over [0, 45] deg (the pushes: about 5 s
     of CPU time each direction and alpha; the section's cost)."""
     params = study.params
-    alpha_opt = study.comparisons[FIG5_CASE].normal.alpha
+    alpha_opt = study.comparisons[FIG5_CASE].optimum.alpha
     length, period = FIG5_CASE
     alphas = inclusive_range(0.0, math.radians(45.0), alpha_step, "arm amplitude")
     loops = [executor.submit(closed_loop_radius, params, L, period, a, s)
@@ -160,21 +161,28 @@ def _figure(rows: int = 1, columns: int = 2, width: float = 5.2) -> tuple[Figure
 def multipliers_figure(walking: Walking) -> Figure:
     """Left: the moduli of the four largest open-loop multipliers of the normal gait against
     alpha for each Fig. 4 L (T = 0.45 s). Right: the walker's closed-loop spectral radius,
-    plain re-aim and momentum steering."""
+    plain re-aim and momentum steering. A colour per L, a line style per multiplier (left) or
+    re-aim (right), each said once in the legends."""
     fig, [[left, right]] = _figure()
+    ranks = ("-", "--", ":", "-.")
+    loops = ((None, "--", "plain re-aim"), (DEFAULT_RATE, "-", f"momentum steering rho = {DEFAULT_RATE:g}"))
     for i, length in enumerate(FIG4_STEP_LENGTHS):
         gaits = sorted((g for g in walking.curves if g.step_length == length and g.mode is GaitMode.NORMAL
                         and g.stability is not None), key=lambda g: g.arm_amplitude)
         moduli = np.array([np.abs(g.stability.values[:4]) for g in gaits]).reshape(len(gaits), 4)
-        for rank, style in enumerate(("-", "--", ":", "-.")):
-            left.plot([math.degrees(g.arm_amplitude) for g in gaits], moduli[:, rank], style, color=f"C{i}",
-                      label=f"L = {length:g} m" if rank == 0 else None)
-        for steering, style in ((None, "--"), (DEFAULT_RATE, "-")):
+        for rank, style in enumerate(ranks):
+            left.plot([math.degrees(g.arm_amplitude) for g in gaits], moduli[:, rank], style, color=f"C{i}")
+        for steering, style, _ in loops:
             curve = sorted((lp for lp in walking.loops if lp.step_length == length and lp.steering == steering),
                            key=lambda lp: lp.alpha)
             right.plot([math.degrees(lp.alpha) for lp in curve], [lp.radius for lp in curve], style, marker=".",
-                       color=f"C{i}", label=f"L = {length:g} m, " + ("plain re-aim" if steering is None else
-                                                                     f"steering rho = {steering:g}"))
+                       color=f"C{i}")
+    lengths = [Line2D([], [], color=f"C{i}", linewidth=3, label=f"L = {length:g} m")
+               for i, length in enumerate(FIG4_STEP_LENGTHS)]
+    left.legend(handles=lengths + [Line2D([], [], color="k", linestyle=style, label=f"|lambda_{rank + 1}|")
+                                   for rank, style in enumerate(ranks)], fontsize="x-small", ncols=2, handlelength=3)
+    right.legend(handles=lengths + [Line2D([], [], color="k", linestyle=style, marker=".", label=label)
+                                    for _, style, label in loops], fontsize="x-small", handlelength=3)
     left.set_yscale("log")
     left.set_title("Open-loop Floquet multipliers |lambda_1..4|, T = 0.45 s", fontsize="medium")
     right.set_yscale("log")
@@ -182,7 +190,6 @@ def multipliers_figure(walking: Walking) -> Figure:
     for ax in (left, right):
         ax.set_xlabel("arm amplitude alpha (deg)")
         ax.grid(True, alpha=0.3, which="both")
-        ax.legend(fontsize="x-small")
     return fig
 
 

@@ -12,6 +12,10 @@ height (m), max friction ratio, min swing-knee angle q9 (rad), yaw angular momen
 one it was built with): a stale or unreadable file is refused with a one-line message that says how
 to rebuild it.
 
+A request's margins are answered by filtering the nodes (``Atlas.within``), not by rebuilding:
+the swing clearance and the step's friction ratio are stored; the margins on the impulses (the
+friction margin on them, the joint-rate bound) are the impulse problem's, solved per request.
+
 Files are compressed NumPy archives (``.npz``, no pickles). The shipped atlases are package data
 (``biped_gait/core/data/atlas/``); atlases of a user's parameter file go to the cache
 (``$BIPED_GAIT_CACHE``, else ``$XDG_CACHE_HOME/biped_gait``, else ``~/.cache/biped_gait``).
@@ -24,7 +28,7 @@ import math
 import os
 import zipfile
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from enum import IntEnum
 from importlib import resources
 from pathlib import Path
@@ -35,6 +39,7 @@ from .admissibility import Limit, describe
 from .configurations import GaitMode
 from .continuation import SPACING
 from .fingerprint import ATLAS_FORMAT, model_fingerprint, source_fingerprint
+from .margins import Margins
 from ..model.params import BipedParams, load_params, shipped_param_names
 
 STEP_LENGTHS = np.round(np.arange(0.25, 0.65 + 1e-9, 0.025), 6)  # m
@@ -121,7 +126,10 @@ class Grid:
 class Atlas:
     """The gaits of one parameter set (``params``, its name; ``friction`` its coefficient) and
     ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array;
-    ``fingerprint`` and ``source`` are the model and source fingerprints it was built with."""
+    ``fingerprint`` and ``source`` are the model and source fingerprints it was built with;
+    ``margins``: those it is seen through (``within``; none for an atlas as built); ``options``:
+    the ``GaitRequest`` fields it was built with beyond the point and mode (none for the
+    planner's: a study's atlas, written elsewhere, says here what it holds)."""
 
     params: str
     mode: GaitMode
@@ -131,6 +139,8 @@ class Atlas:
     nodes: dict[str, np.ndarray]
     build_seconds: float = math.nan
     source: str = ""
+    margins: Margins = Margins()
+    options: dict = field(default_factory=dict)
 
     @classmethod
     def empty(cls, params: BipedParams, mode: GaitMode, grid: Grid | None = None) -> "Atlas":
@@ -143,6 +153,18 @@ class Atlas:
             nodes[name] = np.full(grid.shape + node_tail(name, params), fill, dtype=dtype)
         return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes,
                    source=source_fingerprint(params))
+
+    def within(self, margins: Margins, friction: float | None = None) -> "Atlas":
+        """This atlas seen through ``margins`` (nodes filtered, not rebuilt): an admissible node
+        whose swing clearance is not above ``margins.clearance`` (m) or whose step friction ratio
+        exceeds ``friction`` (default: the atlas's) minus ``margins.friction`` is inadmissible
+        with no limit's condition (it meets the limits, not the margins)."""
+        mu = self.friction if friction is None else friction
+        n = self.nodes
+        missed = (n["status"] == NodeStatus.ADMISSIBLE) & ~(
+            (n["min_swing_height"] > margins.clearance) & (n["max_friction_ratio"] <= mu - margins.friction))
+        status = np.where(missed, np.uint8(NodeStatus.INADMISSIBLE), n["status"]).astype(n["status"].dtype)
+        return replace(self, nodes={**n, "status": status}, margins=margins)
 
     # Queries ----------------------------------------------------------------------------------
     def status(self, index: tuple[int, int, int]) -> NodeStatus:
@@ -208,14 +230,15 @@ class Atlas:
         k = int(np.argmin(np.abs(self.grid.alphas - alpha)))
         row = self.nodes["status"][i, :, k] == NodeStatus.ADMISSIBLE
         where = f"L = {self.grid.step_lengths[i]:.3f} m, alpha = {math.degrees(self.grid.alphas[k]):.0f} deg"
+        what = "within the margins" if self.margins else "admissible"
         if row.any():
             periods = self.grid.periods[row]
-            return f"nearest admissible (atlas grid): T in [{periods.min():.3f}, {periods.max():.3f}] s at {where}"
+            return f"nearest {what} (atlas grid): T in [{periods.min():.3f}, {periods.max():.3f}] s at {where}"
         index = self.nearest(point)
         if index is None:
-            return f"no admissible gait in the atlas of {self.params} ({self.mode.value})"
+            return f"no {what} gait in the atlas of {self.params} ({self.mode.value})"
         nl, nt, na = self.grid.point(index)
-        return f"nearest admissible (atlas grid): L = {nl:.3f} m, T = {nt:.3f} s, alpha = {math.degrees(na):.0f} deg"
+        return f"nearest {what} (atlas grid): L = {nl:.3f} m, T = {nt:.3f} s, alpha = {math.degrees(na):.0f} deg"
 
     def counts(self) -> dict[str, int]:
         """Nodes per status."""
@@ -226,6 +249,9 @@ class Atlas:
         """Write the atlas as a compressed ``.npz`` (atomically: a temporary file, then renamed)."""
         meta = {"format": ATLAS_FORMAT, "params": self.params, "mode": self.mode.value, "fingerprint": self.fingerprint,
                 "friction": self.friction, "build_seconds": self.build_seconds, "source": self.source}
+        if self.options:
+            meta["options"] = {k: v if not isinstance(v, float) or math.isfinite(v) else str(v)
+                               for k, v in self.options.items()}
         return write_archive(path, meta, {"step_lengths": self.grid.step_lengths, "periods": self.grid.periods,
                                           "alphas": self.grid.alphas, **self.nodes})
 
@@ -242,7 +268,8 @@ class Atlas:
         check_shapes(path, "gait atlas", rebuild, {name: grid.shape + node_tail(name, params) for name in NODE_ARRAYS},
                      nodes)
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
-                   float(meta.get("build_seconds", math.nan)), meta.get("source", ""))
+                   float(meta.get("build_seconds", math.nan)), meta.get("source", ""),
+                   options=meta.get("options", {}))
 
 
 def write_archive(path: Path, meta: dict, arrays: dict[str, np.ndarray]) -> Path:

@@ -20,15 +20,16 @@ from .configurations import GaitMode
 from ..dynamics.impulses import EffortOptions, ImpulseSolution
 from ..model.biped import CoordinateNames
 from .figures import StepFigures
+from .margins import Margins
 from .stability import Multipliers
 
 
 @dataclass(frozen=True)
 class GaitProblem:
     """A validated gait request: L (m), T (s), alpha (rad), mode, parameter set name, closure
-    (``theta``/``slack``), effort (``l1``/``l2``) and how the impulses are chosen (friction
+    (``theta``/``slack``), effort (``l1``/``l2``), how the impulses are chosen (friction
     coefficient, joint-rate bound in rad/s, the effort's reading), step width (m, between the
-    feet) and turn radius (m, signed: positive turns left; inf: straight)."""
+    feet), turn radius (m, signed: positive turns left; inf: straight) and the margins asked."""
 
     step_length: float
     period: float
@@ -40,6 +41,20 @@ class GaitProblem:
     options: EffortOptions
     step_width: float
     turn_radius: float = math.inf
+    margins: Margins = Margins()
+
+    @property
+    def impulse_options(self) -> EffortOptions:
+        """The options the double support's impulses are solved with: the friction cone at
+        mu - the friction margin."""
+        if not self.margins.friction:
+            return self.options
+        return replace(self.options, friction=self.options.friction - self.margins.friction)
+
+    @property
+    def limit_options(self) -> EffortOptions:
+        """The options of the limits alone: the friction cone at mu, no joint-rate bound."""
+        return replace(self.options, rate_bound=math.inf)
 
 
 @dataclass(frozen=True)
@@ -107,6 +122,8 @@ class Gait:
     params = property(lambda self: self.problem.params, doc="name of the parameter set")
     converged = property(lambda self: self.step.converged, doc="the ballistic BVP converged")
     admissible = property(lambda self: self.verdict.admissible, doc="the gait can be walked")
+    within_limits = property(lambda self: self.verdict.admissible or not self.verdict.limits,
+                             doc="the gait meets the limits (it may miss the margins asked)")
     reasons = property(lambda self: self.verdict.reasons, doc="why not, when not")
     theta = property(lambda self: self.step.theta, doc="trunk pitch at double support (rad)")
     qd_a = property(lambda self: self.step.qd_a, doc="qd(0) (rad/s)")

@@ -28,10 +28,11 @@ from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
 from ..dynamics.flow import hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem, Stride
 from ..dynamics.hybrid import HybridStep
-from ..dynamics.impulses import EFFORTS, EffortOptions, friction_ratios, solve_impulses
+from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, friction_ratios, solve_impulses
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params
 from .figures import StepFigures, energy_drift, step_figures
+from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .stability import PoincareMap, multipliers_of, open_loop
 from .stride import solve_stride
@@ -50,11 +51,13 @@ StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, 
 class GaitRequest:
     """What to plan: step length L (m), period T (s), arm amplitude alpha (rad), gait mode (a
     ``GaitMode`` or its name, parsed here), parameter set (name or file; empty: the planner's),
-    closure (``theta``/``slack``), effort (``l1``/``l2``); the impulses' friction coefficient
-    (None: the parameter set's; inf: no cone), the bound on the double support's joint rates
-    (rad/s; inf: none), the effort's reading (``joint``/``absolute``), the step width (m, between
-    the feet; None: the hips' spacing) and the turn radius (m, signed: positive turns left; inf:
-    straight; a finite one is a stride, ``GaitPlanner.plan_stride``)."""
+    closure (``theta``/``slack``), effort (``l1``/``l2``); the friction coefficient (NaN: the
+    parameter set's; inf: no cone), the bound on the double support's joint rates (rad/s; inf:
+    none), the effort's reading (``joint``/``absolute``), the margins: the swing tip's least
+    clearance (m) and the friction margin (the impulses and the step within mu - it), the step
+    width (m, between the feet; NaN: the hips' spacing) and the turn radius (m, signed: positive
+    turns left; inf: straight; a finite one is a stride, ``GaitPlanner.plan_stride``). The
+    options' names, units and defaults are those of ``biped_gait.gait_options``."""
 
     step_length: float
     period: float
@@ -63,10 +66,12 @@ class GaitRequest:
     params: str = ""
     closure: str = "theta"
     effort: str = "l1"
-    friction: float | None = None
+    friction: float = math.nan
     rate_bound: float = math.inf
     effort_coordinates: str = "joint"
-    step_width: float | None = None
+    min_clearance: float = 0.0
+    friction_margin: float = 0.0
+    step_width: float = math.nan
     turn_radius: float = math.inf
 
     def __post_init__(self) -> None:
@@ -104,15 +109,24 @@ def validate_request(request: GaitRequest, params: BipedParams) -> GaitProblem:
         raise ValueError(f"unknown closure {request.closure!r}: use 'theta' or 'slack'")
     if request.effort not in EFFORTS:
         raise ValueError(f"unknown effort {request.effort!r}: use 'l1' or 'l2'")
-    friction = params.friction if request.friction is None else _number("friction coefficient", request.friction)
+    friction = _number("friction coefficient", request.friction)
+    friction = params.friction if math.isnan(friction) else friction
+    if friction == 0:
+        raise ValueError("friction coefficient 0 is a frictionless floor, on which no gait walks (NaN: the parameter "
+                         "set's coefficient; inf: no cone)")
     options = EffortOptions(friction, _number("joint-rate bound", request.rate_bound), request.effort_coordinates)
     width = validate_step_width(request.step_width, params)
     radius = validate_turn_radius(request.turn_radius, params)
     if math.isfinite(radius) and (width != params.hip_spacing or request.closure != "theta"):
         raise ValueError("a gait on a circle has its feet at the hips' spacing (turned) and the theta closure")
+    clearance = _finite("swing clearance margin", request.min_clearance)
+    margin = _finite("friction margin", request.friction_margin)
+    if clearance < 0:
+        raise ValueError(f"swing clearance margin must be 0 (none) or positive, got {clearance:g} m")
+    if not 0 <= margin < friction:
+        raise ValueError(f"friction margin must be in [0, {friction:g}) (the friction coefficient), got {margin:g}")
     return GaitProblem(step_length, period, alpha, request.mode, params.name, request.closure, request.effort, options,
-                       width, radius)
-
+                       width, radius, Margins(clearance, margin))
 
 def validate_turn_radius(turn_radius: float, params: BipedParams) -> float:
     """The turn radius (m) of a request: inf (straight), or finite beyond the hips' half spacing
@@ -136,13 +150,14 @@ STEP_WIDTH_SPAN = 0.5
 of it (0.2 to 0.6 m for the shipped sets)."""
 
 
-def validate_step_width(step_width: float | None, params: BipedParams) -> float:
-    """The step width (m) of a request (None: the hips' spacing); ``ValueError`` outside the
+def validate_step_width(step_width: float, params: BipedParams) -> float:
+    """The step width (m) of a request (NaN: the hips' spacing); ``ValueError`` outside the
     range the model can walk."""
     spacing = params.hip_spacing
-    if step_width is None:
+    width = _number("step width", step_width)
+    if math.isnan(width):
         return spacing
-    width = _finite("step width", step_width)
+    width = _finite("step width", width)
     if width == spacing:
         return width
     if not params.joints.lateral_hips:
@@ -372,6 +387,8 @@ class GaitPlanner:
         """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold."""
         point = (problem.step_length, problem.period, problem.arm_amplitude)
         atlas = self.atlas(problem.mode)
+        if atlas is not None and problem.margins:
+            atlas = atlas.within(problem.margins, problem.options.friction)
         first = None
         guess = atlas.guess(point) if atlas is not None else None
         if guess is not None:
@@ -446,14 +463,22 @@ class GaitPlanner:
         step's initial velocity, its own coordinates; default the step's own: a periodic gait), its
         figures and the verdict; no stability."""
         double_support = figures = None
+        within_limits = None
         if step.converged:
-            double_support = self._double_support(step, problem, step.qd_a if next_qd_a is None else next_qd_a)
+            double_support, within_limits = self._double_support(step, problem,
+                                                                 step.qd_a if next_qd_a is None else next_qd_a)
             figures = self._figures(step, problem.period)
-        verdict = judge(step, double_support.impulses if double_support else None, figures, problem.options.friction,
-                        self.params.joints.role("knee").limits.lower)
+        impulses = double_support.impulses if double_support else None
+        verdict = with_margins(judge(step, impulses, figures, problem.options.friction,
+                                     self.params.joints.role("knee").limits.lower),
+                               impulses, figures, problem.options.friction, problem.margins, within_limits)
         return Gait(problem, self.model.coordinate_names, step, double_support, figures, verdict, math.nan, found)
 
-    def _double_support(self, step: BvpSolution, problem: GaitProblem, next_qd_a: np.ndarray) -> DoubleSupport:
+    def _double_support(self, step: BvpSolution, problem: GaitProblem,
+                        next_qd_a: np.ndarray) -> tuple[DoubleSupport, ImpulseSolution | None]:
+        """The double support towards ``next_qd_a`` with the impulses under the request's
+        margins, and, when those have no solution but the margins narrow the impulse problem, the
+        impulses under the limits alone (else None)."""
         bm = self.model
         q_t = step.q_target
         impact = self.hybrid.impact(q_t)
@@ -463,7 +488,10 @@ class GaitPlanner:
             # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
             # eqs. (6)-(10) consistent.
             lp, slack = lp.reachable()
-        sol = solve_impulses(lp, problem.effort, problem.options)
+        sol = solve_impulses(lp, problem.effort, problem.impulse_options)
+        within_limits = None
+        if not sol.success and problem.impulse_options != problem.limit_options:
+            within_limits = solve_impulses(lp, problem.effort, problem.limit_options)
         xd_b, xd_a = lp.xd_b, lp.xd_a
         new_foot = bm.swing_tip(q_t)
         origin = np.zeros(3)
@@ -487,7 +515,7 @@ class GaitPlanner:
             max_intermediate_joint_rate=float(np.max(np.abs(sol.joint_rates))),
             heading_change=self.hybrid.exchange.heading(q_t),
             foot_line_moment=sol.foot_line_moment(lp) if sol.success else 0.0,
-        )
+        ), within_limits
 
     def _figures(self, step: BvpSolution, period: float) -> StepFigures:
         times = np.linspace(0.0, period, self.settings.samples)

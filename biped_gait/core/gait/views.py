@@ -148,6 +148,10 @@ FIELDS: tuple[Field, ...] = (
     Field("open_loop_stable", lambda g: g.stability.stable if g.stability else False, "open_loop_stable"),
     Field("solve_time_s", lambda g: g.solve_time_s, "solve_time"),
     Field("trajectory", _trajectory),
+    # The margins asked and whether the gait meets the limits (it may miss the margins).
+    Field("min_clearance", lambda g: g.problem.margins.clearance, "min_clearance"),
+    Field("friction_margin", lambda g: g.problem.margins.friction, "friction_margin"),
+    Field("within_limits", lambda g: g.within_limits, "within_limits"),
 )
 FIELD_BY_KEY = {f.key: f for f in FIELDS}
 
@@ -187,6 +191,9 @@ def summary(gait: Gait) -> str:
         f"converged {gait.converged} ({d['bvp_iterations']} Newton iterations, found by {gait.found}), "
         f"admissible {gait.admissible}",
     ]
+    margins = gait.problem.margins.text(gait.problem.options.rate_bound)
+    if margins:
+        lines.append(f"margins: {margins}")
     lines += [f"  not admissible: {r}" for r in gait.reasons]
     if gait.hint:
         lines.append(f"  {gait.hint}")

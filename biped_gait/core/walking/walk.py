@@ -89,7 +89,7 @@ class PlannedOrbit:
         ds = gait.double_support
         return cls(gait.problem.params, gait.step_length, gait.period, gait.arm_amplitude, gait.mode,
                    gait.problem.effort, gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b,
-                   gait.converged, gait.admissible, gait.reasons, gait.problem.options,
+                   gait.converged, gait.admissible, gait.reasons, gait.problem.impulse_options,
                    ds.foot_line_moment if ds is not None else 0.0, gait.theta, gait.problem.turn_radius)
 
 
