@@ -174,6 +174,7 @@ class _Periodic:
         self.hybrid, self.gait, self.duration = hybrid, gait, duration
         bm = hybrid.bm
         self.n, self.na, self.actuated = bm.nq, len(bm.actuated), bm.actuated
+        self.free = self.n + 1  # the unknowns before the torques: v0, theta
         self.flow = hybrid.flow(DEFAULTS.fine_steps)  # the planner's fine grid
         self.configurations = boundary_configurations(bm)
         self.friction = bm.params.friction if math.isinf(gait.problem.options.friction) else gait.problem.options.friction
@@ -253,21 +254,23 @@ def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float) -> Fini
 
 def _merit(eq: _Periodic, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> float:
     """The l1 merit of z: its effort plus ``PENALTY`` times the residual's and the violations' sums."""
-    torques = z[eq.n + 1:]
+    torques = z[eq.free:]
     return float(eq.duration / 2 * np.abs(torques).sum()
                  + PENALTY * (np.abs(residual).sum() + np.maximum(constraints, 0.0).sum()))
 
 
-def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
-    """z solving ``eq`` (periodic to ``TOLERANCE``, constraints met) from ``z``: linear programs in
-    the step of z with elastic constraints (violations paid at ``PENALTY``), within a trust region
-    that shrinks until the step lowers the l1 merit."""
-    n, na, half, duration = eq.n, eq.na, eq.duration / 2, eq.duration
-    torques = slice(n + 1, n + 1 + 2 * na)
+def _sequential_lp(eq, z: np.ndarray, tolerance: float = TOLERANCE) -> tuple[np.ndarray, int]:
+    """z solving ``eq`` (its equations to ``tolerance``, constraints met) from ``z``: linear
+    programs in the step of z with elastic constraints (violations paid at ``PENALTY``), within a
+    trust region that shrinks until the step lowers the l1 merit. ``eq``: a ``_Periodic``, or
+    anything with its ``free`` (the unknowns before the 2 ``na`` torques, which end z),
+    ``duration`` and ``evaluate`` (residual, constraints <= 0, anything)."""
+    na, half, duration = eq.na, eq.duration / 2, eq.duration
+    torques = slice(eq.free, eq.free + 2 * na)
     residual, constraints, _ = eq.evaluate(z)
     radius = RADIUS
     for iteration in range(1, SLP_ITERATIONS + 1):
-        if np.max(np.abs(residual)) < TOLERANCE and np.max(constraints) <= 1e-9:
+        if np.max(np.abs(residual)) < tolerance and np.max(constraints) <= 1e-9:
             return z, iteration
 
         def stacked(x: np.ndarray) -> np.ndarray:
@@ -275,8 +278,9 @@ def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
             return np.concatenate([r, c])
 
         jac = _jacobian(stacked, z, np.concatenate([residual, constraints]))
-        j_eq, j_in = jac[:2 * n], jac[2 * n:]
-        size, m, e = len(z), len(constraints), 2 * n
+        e = len(residual)
+        j_eq, j_in = jac[:e], jac[e:]
+        size, m = len(z), len(constraints)
         # variables: dz, t >= |u + du| (2 na), s >= 0 (the inequalities' slack), s+, s- >= 0 (the equations')
         width = size + 2 * na + m + 2 * e
         cost = np.concatenate([np.zeros(size), np.full(2 * na, half), np.full(m + 2 * e, PENALTY)])
@@ -291,7 +295,7 @@ def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
             rhs.append(-sign * z[torques])
         a_eq = np.zeros((e, width))
         a_eq[:, :size], a_eq[:, width - 2 * e: width - e], a_eq[:, width - e:] = j_eq, -np.eye(e), np.eye(e)
-        scale = np.concatenate([np.ones(n + 1), np.full(2 * na, max(1.0, float(np.max(np.abs(z[torques])))))])
+        scale = np.concatenate([np.ones(eq.free), np.full(2 * na, max(1.0, float(np.max(np.abs(z[torques])))))])
         merit = _merit(eq, z, residual, constraints)
         for _ in range(LINE_SEARCH):
             bounds = [(-radius * w, radius * w) for w in scale] + [(0, None)] * (width - size)

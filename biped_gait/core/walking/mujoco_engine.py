@@ -1,45 +1,50 @@
 """The walk in a second engine (``engine:=mujoco``, docs/model.md section 11): each step's single
-support integrated by MuJoCo (RK4) on the floating export (``core/model/mjcf.py``: a free pelvis,
-motors on the joints, point feet on a floor with the parameter set's friction), the double support
-as finite joint torques over ``pulse_duration`` d seconds, and the walker's re-aim (and momentum
-steering) as the feedback, from the state MuJoCo gives.
+support integrated by MuJoCo (RK4) on the exported stance-rooted tree (``core/model/mjcf.py``,
+kind ``stance``: its qpos and qvel are the model's q and qd), the double support as finite joint
+torques over ``pulse_duration`` d seconds, and the walker's re-aim (and momentum steering) as the
+feedback, from the state MuJoCo gives.
 
-**The double support** (the phase of docs/model.md section 10, walked): the walker's impulses I^-
-and I^+ spread into constant torques over d / 2 each,
+**Why the stance-rooted tree, with the contact checked, and not MuJoCo's point-foot contacts.**
+The floating export (a free pelvis, point feet on a floor) does load and walk in MuJoCo, but its
+soft contacts are not the paper's pivot: the contact force needs a penetration to build (the
+first millisecond is a free fall), the friction constraints restore velocities, not positions (the
+stance foot creeps and spins about the vertical, 0.3 mrad in 40 ms, the spin moment off the
+pivot's by up to 0.6 N m), and the ballistic single support amplifies any error about 100-fold
+within one step: started on the plan, MuJoCo's floating robot reaches the touchdown 0.07 rad
+(0.09 rad with the export's contact parameters) and 1.1 rad/s off the plan, whatever the contacts'
+stiffness (impedance 0.9 to 0.9999, impratio 1 to 1000, time constant 0.5 to 2 ms, foot radius 1 mm
+to 1 um), beyond what any re-aim from the touchdown recovers. The tree holds the stance tip as the
+pivot does; the contact is checked instead, at every sample, from MuJoCo's own reaction at the tip
+(``mj_rnePostConstraint``: the force the world exerts on the stance shin): the vertical force
+positive, within the friction cone of the parameter set (``Fall`` otherwise).
 
-- u^- = I^- / (d / 2) over the last d / 2 before the touchdown the planner's model predicts,
-- the touchdown itself: MuJoCo's contact of the swing foot (a soft, inelastic contact, no
-  torque of ours in it but the pulses'),
-- u^+ = I^+ / (d / 2) over the first d / 2 after MuJoCo's touchdown (I^+ in the old step's
-  joints: the same motors);
+**The double support** (the phase of docs/model.md section 10, walked): around each touchdown,
 
-each torque's integral is exact: MuJoCo holds a control constant over its step h, so a step the
-pulse only partly covers gets the torque times the fraction covered. As d -> 0 the pulses become
-the impulses of the hybrid walker.
+- the pre-impact pulse: constant torques u^- over the d / 2 s before the predicted touchdown (the
+  old stance foot on the ground);
+- the passive impact, where MuJoCo's swing tip reaches the floor (located to 1e-12 m by
+  re-integrating MuJoCo's last step in part): eqs. (8)-(9) with MuJoCo's D_e and J2 (the
+  ``extended`` export), then the leg exchange;
+- the post-impact pulse: constant torques u^+ over the first d / 2 s of the next step.
 
-**The feedback.** ``DECISION_LEAD`` s before the pre-impact pulse is due (the last re-aim's
-duration tells when), the engine reads MuJoCo's state as the model's (q, qd), predicts the
-ballistic touchdown with the planner's flow and guard (RK8, ``Walker.flow``), and hands that
-pre-impact state to the walker's double support (``Walker._double_support``): the re-aim of the
-next step from there and the impulses of its LP, exactly as the hybrid walker does at its
-touchdown. The next step then starts from whatever MuJoCo made of the pulses: its state at the
-touchdown, read again, is the next step's (and its stance foot where MuJoCo put it).
+MuJoCo holds a control constant over its step, so a step a pulse covers in part gets its torque
+times the fraction covered: each pulse's integral is exact.
 
-**MuJoCo's state as the model's.** Joints: the URDF angles mapped by ``UrdfJoints`` (signs, sides,
-mirror); the stance ankle's roll and pitch from the stance shin's orientation in the step's model
-frame, R = Rz(psi) Rx(q1) Ry(q2): psi is the stance foot's spin about the vertical, a rigid turn
-of the whole robot (which the dynamics does not see; the next step's heading takes the new
-stance foot's); the rates from the shin's angular velocity (omega' = Rz(-psi) omega: q1d =
-omega'_x, q2d = omega'_y / cos q1). Samples carry MuJoCo's contact force on the stance foot as
-the ground reaction [Fx, Fy, Fz, Mz] (N, N m, model axes).
+**The feedback** (``_plan``). ``DECISION_LEAD`` s before the pre-impact pulse is due (the last
+re-aim's duration tells when), the engine reads MuJoCo's state, predicts the ballistic touchdown
+with the planner's flow and guard, and hands that pre-impact state to the walker's double support
+(``Walker._double_support``): the re-aim of the next step (with momentum steering if the walker
+has it) and the LP's impulses I^-, I^+, exactly as the hybrid walker does at its touchdown. The
+pulses u = I / (d / 2) reach that re-aimed next step only as d -> 0: the configuration moves
+during them (the joints at up to 16 rad/s), and the open-loop step amplifies the difference.
+So the torques are corrected, with the planner's model, until the pulsed phase lands on the
+re-aimed next step: unknowns the torques u^- and u^+ (2 nA) and the next step's duration tau;
+equations: the swing tip on the ground at the pre-impact pulse's end (1), and the next step's
+configuration at tau the re-aimed one's at its touchdown (nq); Gauss-Newton steps of least norm
+(the torques scaled by their largest), from the impulses spread, to ``TOLERANCE``. The next step
+then starts from whatever MuJoCo made of the pulses.
 
-**Falls**: a limb (any geom but the feet) touching the floor, the stance foot more than
-``FOOT_LIFT`` above it, no touchdown within 2 T, or the walker's double support failing.
-
-Joint limits are not enforced (the planner does not: the default gait's stance knee overextends by
-0.35 deg) and neither is the table's effort bound (the pulses' torques are the impulses over
-milliseconds, far above it: ``MujocoTouchdown.peak_torque`` says how far). Units SI, rad; time
-in the walk (s) unless said "in the step".
+Units SI, rad; times in the walk (s) unless said "in the step".
 """
 
 from __future__ import annotations
@@ -49,27 +54,35 @@ from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
+from scipy.linalg import null_space
+from scipy.optimize import brentq, linprog
 
-from ..model.biped import BipedModel
-from ..model.exchange import mirror_for, other_side, world_axes
-from ..model.mjcf import FLOOR, TIMESTEP, make_mjcf
+from ..dynamics.hybrid import HybridStep, impact_with
+from ..model.biped import STANCE_TIP, SWING_TIP
+from ..model.exchange import exchange_matrix, next_heading, other_side
+from ..model.mjcf import TIMESTEP, make_mjcf
+from .finite_support import FD_STEP, cone_rows, friction_ratio, passive_impact, pulse
 from .push import AppliedPush
-from .walk import Fall, Sample, StepOutcome, Walker, WalkState
-from .world import WorldView
+from .walk import Fall, Sample, StepOutcome, Touchdown, Walker, WalkState
 
-DECISION_LEAD = 0.01  # s: the touchdown is predicted this long before its pre-impact pulse is due
-FOOT_LIFT = 2e-3  # m: the stance tip this far above the floor has left the ground (a fall)
+DECISION_LEAD = 0.01  # s: the double support is planned this long before its pre-impact pulse is due
+TOLERANCE = 1e-7  # m, rad: the corrected pulses land on the re-aimed next step to this (the next re-aim takes the rest)
+CORRECTIONS = 30  # Gauss-Newton steps of the correction at most
+HALVINGS = 12  # of a Gauss-Newton step at most, until the merit falls
+SLACK = 1e-6  # N s, m/s: how far a constraint of the corrected phase may be violated (second-order effects)
+MARGIN = 1e-7  # N s, m/s: the linearized constraints are met with this margin
+VIOLATION_COST = 1e3  # per N s of a constraint violated (slack) against the step's norm (scaled)
 
 
 @dataclass(frozen=True)
 class MujocoTouchdown:
-    """One touchdown in MuJoCo beside the planner's prediction of it: the step; MuJoCo's touchdown
-    time (s in the walk, at its step's end); the predicted ballistic touchdown's time (s in the
-    walk) and state (q, qd: rad, rad/s, the step's model coordinates) from the state at the
-    decision; MuJoCo's state at its touchdown (after the pre-impact pulse); the largest pulse
-    torque (N m) against the table's effort bound; the largest |F_xy| / F_z of the stance foot's
-    contact over the step's samples; how far the stance foot slid during the step (m,
-    horizontal) and turned about the vertical (rad)."""
+    """One double support in MuJoCo (units SI, rad): the step; MuJoCo's touchdown time (s in the
+    walk); the planner's predicted ballistic touchdown from the decision's state (time in the walk,
+    q, qd); MuJoCo's pre-impact state (q, qd, after the pre-impact pulse); the torques u^- (this
+    step's actuated joints) and u^+ (the next step's), N m; their effort E = (d / 2) sum |u|
+    (N m s) beside the impulses' W; the correction's residual (m, rad) and linear programs; the
+    friction the planned phase needs (the largest |F_xy| / F_z at the pulses' nodes in the planner's
+    model) and the largest |F_xy| / F_z of MuJoCo's stance-tip reaction over the step's samples."""
 
     step: int
     t: float
@@ -78,180 +91,281 @@ class MujocoTouchdown:
     qd_predicted: np.ndarray
     q: np.ndarray
     qd: np.ndarray
-    peak_torque: float
-    effort_bound: float
+    u_minus: np.ndarray
+    u_plus: np.ndarray
+    effort: float
+    impulsive_effort: float
+    residual: float
+    corrections: int
+    friction_planned: float
     friction_used: float
-    slip: float
-    spin: float
+
+    @property
+    def peak_torque(self) -> float:
+        """The largest pulse torque (N m)."""
+        return float(np.max(np.abs(np.concatenate([self.u_minus, self.u_plus]))))
 
 
 @dataclass(frozen=True)
 class _Pulse:
-    """Constant motor controls ``ctrl`` (N m, actuator order) from ``start`` to ``end`` (s)."""
+    """Constant joint torques ``torque`` (N m, the step's q order) from ``start`` to ``end`` (s)."""
 
-    ctrl: np.ndarray
+    torque: np.ndarray
     start: float
     end: float
 
 
 @dataclass(frozen=True)
-class _Records:
-    """MuJoCo's state at sample instants, one row each: URDF joint angles and rates (rad, rad/s),
-    the stance shin's rotation (3 x 3, world) and angular velocity (rad/s, world), the stance tip
-    (m, world), the stance foot's contact force [F (world), moment about the normal] (N, N m)."""
+class _Plan:
+    """A planned double support: the walker's touchdown report, the pre-impact pulse's start (s in
+    the walk), the predicted ballistic touchdown
+    (time in the walk, q, qd), the corrected torques (N m, full q vectors: this step's u^-, the
+    next step's u^+), the correction's residual and steps."""
 
-    t: list[float]
-    angles: list[np.ndarray]
-    rates: list[np.ndarray]
-    shin: list[np.ndarray]
-    omega: list[np.ndarray]
-    tip: list[np.ndarray]
-    force: list[np.ndarray]
+    touchdown: Touchdown
+    pre_start: float
+    t_hit: float
+    q_hit: np.ndarray
+    qd_hit: np.ndarray
+    u_minus: np.ndarray
+    u_plus: np.ndarray
+    residual: float
+    corrections: int
+    friction: float
+
+
+class _Correction:
+    """The pulses' correction (module docstring): z = (tau, u^+, u^-), tau the next step's duration
+    (s), u^+ (the next step's actuated joints) and u^- (this step's), N m; from the pre-impact
+    pulse's start (``q_s``, ``qd_s``: rad, rad/s) to the next step's configuration at tau,
+    ``target`` (rad)."""
+
+    def __init__(self, engine: "MujocoEngine", walker: Walker, q_s: np.ndarray, qd_s: np.ndarray,
+                 target: np.ndarray) -> None:
+        self.hybrid, self.flow = engine.hybrid, walker.step_flow
+        self.q_s, self.qd_s, self.target = q_s, qd_s, target
+        self.duration, self.friction = engine.pulse_duration, engine.friction
+        self.actuated, self.na = engine._actuated, len(engine._actuated)
+
+    def torque(self, u: np.ndarray) -> np.ndarray:
+        """The joint torques (nq, q order, N m) of the actuated joints' ``u``."""
+        out = np.zeros(self.hybrid.bm.nq)
+        out[self.actuated] = u
+        return out
+
+    def phase(self, u_plus: np.ndarray, u_minus: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+        """The pulsed phase of the torques ``u_plus``, ``u_minus`` (N m): the next step's state at
+        the post-impact pulse's end (q, qd stacked, rad, rad/s), the swing tip's height at the
+        pre-impact pulse's end (m), the constraints of ``evaluate`` and the stance tips' reactions
+        at the pulses' nodes (N)."""
+        hybrid, bm, half = self.hybrid, self.hybrid.bm, self.duration / 2
+        q_e, qd_e, before = pulse(hybrid, self.q_s, self.qd_s, self.torque(u_minus), half)
+        impact = hybrid.impact(q_e)
+        landing = passive_impact(impact, qd_e)
+        exchange = hybrid.exchange
+        q_p, qd_p, after = pulse(hybrid, exchange.configuration(q_e), exchange.velocity(q_e, landing.xd_plus),
+                                 self.torque(u_plus), half)
+        forces = np.vstack([before, after])
+        arrival = float(impact.j2[2] @ bm.embed(qd_e))
+        constraints = np.concatenate([*(cone_rows(f * half, self.friction) for f in forces),
+                                      cone_rows(landing.reaction, self.friction), [-landing.old_foot_vz, arrival]])
+        return np.concatenate([q_p, qd_p]), float(bm.swing_tip(q_e)[2]), constraints, forces
+
+    def evaluate(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The equations' residual (the next configuration at tau less the target, rad; the swing
+        tip's height at the pulse's end, m), the constraints (<= 0: the stance tip's reaction at
+        every node of both pulses in the friction cone with a positive normal force, as impulses
+        over d / 2 (N s), the passive impact's reaction likewise, the old stance foot leaving, the
+        swing tip coming down), and the stance tips' reactions at the pulses' nodes (N)."""
+        na, n = self.na, self.hybrid.bm.nq
+        state, height, constraints, forces = self.phase(z[1:1 + na], z[1 + na:])
+        with np.errstate(over="ignore", invalid="ignore"):
+            run = self.flow.propagate(state[:n], state[n:], z[0] - self.duration / 2)
+        return np.append(run.q - self.target, height), constraints, forces
+
+    def solve(self, z: np.ndarray) -> tuple[np.ndarray, int]:
+        """z with the equations met to ``TOLERANCE`` and the constraints to ``SLACK``, from ``z``;
+        and the Gauss-Newton steps taken. Each step is the least one (the torques scaled by their
+        largest, tau in s) that meets the linearized equations, moved in their null space to meet
+        the linearized constraints (``_project``), halved until the merit sum |residual| +
+        sum max(constraint - SLACK, 0) falls (the Jacobian: ``differences``). ``Fall`` if it does
+        not converge in ``CORRECTIONS`` steps."""
+        residual, constraints, _ = self.evaluate(z)
+        jac = self.differences(z, residual, constraints)
+
+        def merit(r: np.ndarray, c: np.ndarray) -> float:
+            return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
+
+        for steps in range(CORRECTIONS):
+            if np.max(np.abs(residual)) < TOLERANCE and np.max(constraints) <= SLACK:
+                return z, steps
+            step, now = self._step(jac, z, residual, constraints), merit(residual, constraints)
+            for _ in range(HALVINGS):
+                trial = self.evaluate(z + step)
+                if merit(trial[0], trial[1]) < now:
+                    break
+                step = step / 2
+            else:
+                break
+            z, (residual, constraints, _) = z + step, trial
+            jac = self.differences(z, residual, constraints)
+        raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next step "
+                   f"within the friction cone (residual {np.max(np.abs(residual)):.2e}, constraint "
+                   f"{np.max(constraints):.2e})")
+
+    def _scale(self, z: np.ndarray) -> np.ndarray:
+        """The unknowns' scales: tau in s, the torques in their largest (N m)."""
+        return np.append(1.0, np.full(2 * self.na, max(1.0, float(np.max(np.abs(z[1:]))))))
+
+    def differences(self, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> np.ndarray:
+        """d(residual, constraints) / dz: the pulsed phase by forward differences, the flow after it
+        by its sensitivities."""
+        na, n, half = self.na, self.hybrid.bm.nq, self.duration / 2
+        scale = self._scale(z)
+        state, height, _, _ = self.phase(z[1:1 + na], z[1 + na:])
+        run = self.flow.propagate(state[:n], state[n:], z[0] - half, np.eye(2 * n))
+        jac = np.zeros((len(residual) + len(constraints), len(z)))
+        jac[:n, 0] = run.qd
+        for k in range(1, len(z)):
+            dz = np.zeros(len(z))
+            dz[k] = FD_STEP * scale[k]
+            moved, h, c, _ = self.phase(z[1:1 + na] + dz[1:1 + na], z[1 + na:] + dz[1 + na:])
+            jac[:n, k] = run.sens[:n] @ (moved - state) / dz[k]
+            jac[n, k] = (h - height) / dz[k]
+            jac[n + 1:, k] = (c - constraints) / dz[k]
+        return jac
+
+    def _step(self, jac: np.ndarray, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> np.ndarray:
+        """The Gauss-Newton step (``solve``) with the Jacobian ``jac``: the least (scaled) that meets
+        the linearized equations, then moved in their null space by the least that meets the
+        linearized constraints."""
+        scale = self._scale(z)
+        scaled = jac * scale
+        j_eq, j_in = scaled[:len(residual)], scaled[len(residual):]
+        y = np.linalg.lstsq(j_eq, -residual, rcond=None)[0]
+        free = null_space(j_eq)
+        y = y + free @ self._project(j_in @ free, -constraints - j_in @ y - MARGIN)
+        return scale * y
+
+    @staticmethod
+    def _project(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The w of least l1 norm with a w <= b, its violations paid at ``VIOLATION_COST`` (a linear
+        program, HiGHS; w = 0 when it meets them)."""
+        m, k = a.shape
+        if np.all(b >= 0.0):
+            return np.zeros(k)
+        cost = np.concatenate([np.ones(2 * k), np.full(m, VIOLATION_COST)])
+        lp = linprog(cost, A_ub=np.hstack([a, -a, -np.eye(m)]), b_ub=b, bounds=(0, None), method="highs")
+        if lp.status != 0:
+            raise Fall(f"the double support's constraints cannot be linearized ({lp.message})")
+        return lp.x[:k] - lp.x[k:2 * k]
 
 
 class MujocoEngine:
     """Walks a ``Walker``'s steps in MuJoCo (module docstring): ``walk_step(walker)`` in place of
-    the hybrid step. ``world``: the walk's ``WorldView`` of ``bm``; ``rate``: samples per second of
-    simulated time (MuJoCo's step is the largest at most ``mjcf.TIMESTEP`` that divides 1 / rate);
-    ``pulse_duration``: d (s), the double support's."""
+    the hybrid step. ``rate``: samples per second of simulated time (MuJoCo's step is the largest
+    at most ``mjcf.TIMESTEP`` that divides 1 / rate); ``pulse_duration``: d (s)."""
 
-    def __init__(self, bm: BipedModel, world: WorldView, rate: float, pulse_duration: float) -> None:
+    def __init__(self, hybrid: HybridStep, rate: float, pulse_duration: float) -> None:
         if not pulse_duration > 0:
             raise ValueError(f"the pulse duration must be positive, got {pulse_duration} s")
-        self.bm, self.world, self.pulse_duration = bm, world, pulse_duration
-        self.model = model = mujoco.MjModel.from_xml_string(make_mjcf(bm.params, "floating"))
-        model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_LIMIT) | int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL)
+        self.hybrid, self.bm, self.pulse_duration = hybrid, hybrid.bm, pulse_duration
+        params = self.bm.params
+        self.model = model = mujoco.MjModel.from_xml_string(make_mjcf(params, "stance"))
+        model.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_LIMIT)  # as the planner: none enforced
         self.per_sample = max(1, math.ceil(1.0 / (rate * TIMESTEP) - 1e-9))  # MuJoCo steps per sample
-        model.opt.timestep = self.h = 1.0 / (rate * self.per_sample)
+        self.h = 1.0 / (rate * self.per_sample)
+        model.opt.timestep = self.h
         self.data = mujoco.MjData(model)
-        self.joints = world.joints
-        names = self.joints.names
-        ids = [model.joint(name).id for name in names]
-        self._qpos = np.array([model.jnt_qposadr[j] for j in ids])
-        self._qvel = np.array([model.jnt_dofadr[j] for j in ids])
-        self._actuators = np.array([model.actuator(name).id for name in names])
-        self._effort = float(np.max(model.actuator_ctrlrange[:, 1]))
-        self._shin = {side: model.body(f"{side}_shin").id for side in ("right", "left")}
-        self._foot = {side: model.geom(f"{side}_foot").id for side in ("right", "left")}
-        self._tip = {side: model.site(f"{side}_foot").id for side in ("right", "left")}
-        self._floor = model.geom(FLOOR).id
-        self._torso = model.body("torso").id
-        self._ankles = bm.index("ankle_roll"), bm.index("ankle_pitch")
-        # model q -> URDF angles is q @ M (a signed selection); its transpose maps back
-        self._to_urdf = {side: self.joints.array(np.eye(bm.nq), side) for side in ("right", "left")}
-        self.n = 0  # MuJoCo steps since the walk's t = 0
+        self.extended = mujoco.MjModel.from_xml_string(make_mjcf(params, "extended"))
+        self.extended_data = mujoco.MjData(self.extended)
+        self._shin = model.body("stance_shin").id
+        self._trunk = model.body("trunk").id
+        self._swing_tip = model.site(SWING_TIP).id
+        actuated = self.bm.actuated
+        self._actuated = actuated
+        # u^+ in the next step's joints from I^+ in this step's (finite_support: a signed permutation)
+        self._exchange_joints = exchange_matrix(self.bm.coordinates)[np.ix_(actuated, actuated)]
+        self.friction = params.friction
+        self.t = 0.0  # s, MuJoCo's state's time in the walk
         self._pulses: list[_Pulse] = []
         self._started = False
         self.touchdowns: list[MujocoTouchdown] = []
 
-    # MuJoCo's state and the model's -------------------------------------------------------------
-    def set_state(self, s: WalkState) -> None:
-        """MuJoCo's state from the walker's: the model state (q, qd) with its stance foot, side and
-        heading, at the walk time ``s.t``."""
-        pictures = self.world.pictures(s.q, s.qd, s.stance_side, s.stance_foot, s.heading)
-        x, y, z, w = pictures.pelvis_quaternion[0]
-        rotation = np.empty(9)
-        mujoco.mju_quat2Mat(rotation, np.array([w, x, y, z]))
+    # MuJoCo ------------------------------------------------------------------------------------
+    def _torque(self, t0: float, t1: float | None = None) -> np.ndarray:
+        """The pulses' joint torques (N m, q order) at ``t0``, or their mean over [t0, t1] (s)."""
+        torque = np.zeros(self.model.nv)
+        for p in self._pulses:
+            if t1 is None:
+                torque += p.torque if p.start <= t0 < p.end else 0.0
+            elif (overlap := min(t1, p.end) - max(t0, p.start)) > 0:
+                torque += p.torque * (overlap / (t1 - t0))
+        return torque
+
+    def _set(self, q: np.ndarray, qd: np.ndarray, t: float) -> None:
+        """MuJoCo's state: (``q``, ``qd``) at ``t``, its derived quantities computed with the
+        torques acting then."""
         d = self.data
-        d.qpos[:3], d.qpos[3:7] = pictures.pelvis_position[0], (w, x, y, z)
-        d.qvel[:3] = rotation.reshape(3, 3) @ pictures.pelvis_linear_velocity[0]  # MuJoCo: world axes
-        d.qvel[3:6] = pictures.pelvis_angular_velocity[0]  # the pelvis frame, as MuJoCo's free joint
-        d.qpos[self._qpos], d.qvel[self._qvel] = pictures.joint_positions[0], pictures.joint_velocities[0]
-        d.ctrl[:] = 0.0
-        self.n = round(s.t / self.h)
-        d.time = self.n * self.h
+        d.qpos[:], d.qvel[:], d.time = q, qd, t
+        self.t = t
+        d.qfrc_applied[:] = self._torque(t)
         mujoco.mj_forward(self.model, d)
 
-    def _record(self, records: _Records, side: str) -> None:
-        """Append MuJoCo's current state (``side`` the stance foot) to ``records``."""
-        d, shin = self.data, self._shin[side]
-        records.t.append(self.n * self.h)
-        records.angles.append(d.qpos[self._qpos].copy())
-        records.rates.append(d.qvel[self._qvel].copy())
-        records.shin.append(d.xmat[shin].reshape(3, 3).copy())
-        records.omega.append(d.cvel[shin, :3].copy())  # cvel: [angular; linear], world axes
-        records.tip.append(d.site_xpos[self._tip[side]].copy())
-        records.force.append(self._foot_force(side))
+    def _advance(self, t_end: float, push: np.ndarray | None = None) -> None:
+        """One MuJoCo RK4 step to ``t_end`` (s) with the pulses' mean torques over it (each pulse
+        times the fraction of the step it covers) and ``push`` (N s, model axes) on the trunk's CoM
+        spread over it."""
+        d, length = self.data, t_end - self.t
+        d.qfrc_applied[:] = self._torque(self.t, t_end)
+        d.xfrc_applied[self._trunk, :3] = 0.0 if push is None else push / length
+        self.model.opt.timestep = length
+        mujoco.mj_step(self.model, d)
+        d.xfrc_applied[self._trunk, :3] = 0.0
+        self._set(d.qpos.copy(), d.qvel.copy(), t_end)
 
-    def _foot_force(self, side: str) -> np.ndarray:
-        """The floor's force on the ``side`` foot (N, world) and moment about the normal (N m)."""
-        d, foot, out, f6 = self.data, self._foot[side], np.zeros(4), np.zeros(6)
-        for i in range(d.ncon):
-            g1, g2 = d.contact.geom[i]
-            if foot not in (g1, g2):
-                continue
-            mujoco.mj_contactForce(self.model, d, i, f6)
-            frame = d.contact.frame[i].reshape(3, 3)  # rows: the normal (geom1 -> geom2), two tangents
-            sign = 1.0 if g2 == foot else -1.0
-            out[:3] += sign * frame.T @ f6[:3]
-            out[3] += sign * f6[3]
-        return out
+    def _reaction(self) -> np.ndarray:
+        """[Fx, Fy, Fz, Mz] (N, N m, the step's model axes) the ground exerts on the stance tip now:
+        MuJoCo's interaction force of the stance shin with the world (the pulses' torques in it)."""
+        d = self.data
+        mujoco.mj_rnePostConstraint(self.model, d)
+        moment_com, force = d.cfrc_int[self._shin, :3], d.cfrc_int[self._shin, 3:]
+        com = d.subtree_com[self._shin]  # the c-frame's origin; the tip is the world origin
+        return np.array([*force, (moment_com + np.cross(com, force))[2]])
 
-    def model_states(self, records: _Records, side: str, heading: float) -> tuple[np.ndarray, ...]:
-        """The model's (q, qd) of ``records`` (rows) in the model frame of the ``side`` stance foot
-        at ``heading``, the stance foot's spin psi about the vertical in that frame (rad), and the
-        ground reaction [Fx, Fy, Fz, Mz] in its axes (module docstring)."""
-        axes, mirror = world_axes(side, heading), mirror_for(side)
-        det = float(np.linalg.det(axes))
-        shin = axes.T @ np.array(records.shin) @ mirror  # R in the model frame, rows of 3 x 3
-        psi = np.arctan2(-shin[:, 0, 1], shin[:, 1, 1])
-        c, s = np.cos(psi), np.sin(psi)
-        unturn = np.zeros((len(psi), 3, 3))
-        unturn[:, 0, 0], unturn[:, 0, 1], unturn[:, 1, 0], unturn[:, 1, 1], unturn[:, 2, 2] = c, s, -s, c, 1.0
-        rest = unturn @ shin  # Rx(q1) Ry(q2)
-        q1, q2 = np.arctan2(rest[:, 2, 1], rest[:, 1, 1]), np.arctan2(rest[:, 0, 2], rest[:, 0, 0])
-        omega = np.einsum("nij,nj->ni", unturn, det * np.array(records.omega) @ axes)
-        to_model = self._to_urdf[side].T
-        q, qd = np.array(records.angles) @ to_model, np.array(records.rates) @ to_model
-        (roll, pitch) = self._ankles
-        q[:, roll], q[:, pitch] = q1, q2
-        qd[:, roll], qd[:, pitch] = omega[:, 0], omega[:, 1] / np.cos(q1)
-        force = np.array(records.force)
-        grf = np.column_stack([np.einsum("nij,nj->ni", unturn, force[:, :3] @ axes), det * force[:, 3]])
-        return q, qd, psi, grf
+    def _tip_height(self) -> float:
+        return float(self.data.site_xpos[self._swing_tip, 2])
 
-    def _now(self, side: str, heading: float) -> tuple[np.ndarray, ...]:
-        """``model_states`` of MuJoCo's current state alone (rows of one)."""
-        records = _Records([], [], [], [], [], [], [])
-        self._record(records, side)
-        return self.model_states(records, side, heading) + (records.tip[0],)
+    def _land_on_ground(self, t0: float, q0: np.ndarray, qd0: np.ndarray, push: np.ndarray | None) -> None:
+        """The swing tip went below the floor in the MuJoCo step from ``t0`` (state ``q0``,
+        ``qd0``, ``push`` in it) to now: redo that step in part, to where the tip is on the floor
+        (Brent's method on the step's end, 1e-15 s)."""
+        t1 = self.t
 
-    def _controls(self, torque: np.ndarray, side: str) -> np.ndarray:
-        """Motor controls (N m, actuator order) of the model's joint torques ``torque`` (the
-        actuated coordinates' order) with the ``side`` foot in stance."""
-        full = np.zeros(self.bm.nq)
-        full[self.bm.actuated] = torque
-        ctrl = np.zeros(self.model.nu)
-        ctrl[self._actuators] = full @ self._to_urdf[side]
-        return ctrl
+        def height(t: float) -> float:
+            self._set(q0, qd0, t0)
+            self._advance(t, push)
+            return self._tip_height()
 
-    def _step(self, push: np.ndarray | None = None) -> None:
-        """One MuJoCo step with the pulses' controls (each times the fraction of the step it
-        covers) and ``push`` (N s, world) on the trunk's CoM spread over the step."""
-        t0, t1 = self.n * self.h, (self.n + 1) * self.h
-        ctrl = np.zeros(self.model.nu)
-        for p in self._pulses:
-            overlap = min(t1, p.end) - max(t0, p.start)
-            if overlap > 0:
-                ctrl += p.ctrl * (overlap / self.h)
-        self._pulses = [p for p in self._pulses if p.end > t1 + 1e-12]
-        self.data.ctrl[:] = ctrl
-        self.data.xfrc_applied[self._torso, :3] = 0.0 if push is None else push / self.h
-        mujoco.mj_step(self.model, self.data)
-        self.n += 1
-        self.data.xfrc_applied[self._torso, :3] = 0.0
-        mujoco.mj_forward(self.model, self.data)
+        t_c = t1 if height(t0 + 1e-15) <= 0.0 else brentq(height, t0 + 1e-15, t1, xtol=1e-15, rtol=1e-15)
+        height(t_c)
 
-    def _touching(self) -> set[int]:
-        """The geoms touching the floor now."""
-        d, out = self.data, set()
-        for i in range(d.ncon):
-            g1, g2 = d.contact.geom[i]
-            if self._floor in (g1, g2):
-                out.add(int(g2 if g1 == self._floor else g1))
-        return out
+    def _impact(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The passive impact (eqs. 8-9) at ``q`` from ``qd`` with MuJoCo's D_e and J2 (the
+        ``extended`` export; a foot's spin row, with hip roll and yaw joints, the planner's), then
+        the leg exchange: the next step's initial velocity (its coordinates)."""
+        model, data, bm = self.extended, self.extended_data, self.bm
+        data.qpos[:] = bm.ds_state(q)
+        mujoco.mj_forward(model, data)
+        mass = np.zeros((model.nv, model.nv))
+        mujoco.mj_fullM(model, data, mass)
+        impact = self.hybrid.impact(q)
+        j2 = impact.j2.copy()
+        mujoco.mj_jacSite(model, data, j2[:3], None, model.site(SWING_TIP).id)
+        xd_plus = impact_with(mass, j2, bm.embed(qd), np.zeros(impact.layout.na), impact.layout.joints, at_rest=True)
+        return self.hybrid.exchange.velocity(q, xd_plus)
 
-    # The step ----------------------------------------------------------------------------------
+    # The plan of a double support ----------------------------------------------------------------
     def _predict(self, walker: Walker, q: np.ndarray, qd: np.ndarray, t_step: float) -> tuple[float, np.ndarray, np.ndarray]:
         """The ballistic touchdown from (``q``, ``qd``) at ``t_step`` (s in the step) with the
         planner's flow and guard: its time in the step and its state."""
@@ -265,104 +379,130 @@ class MujocoEngine:
             t_step, q, qd = t_step + h, run.q, run.qd
         raise Fall("the planner's model predicts no touchdown from MuJoCo's state within 2 T")
 
+    def _plan(self, walker: Walker, s: WalkState) -> _Plan:
+        """The double support planned from MuJoCo's state now (module docstring, the feedback)."""
+        half = self.pulse_duration / 2
+        q, qd, t_step = self.data.qpos.copy(), self.data.qvel.copy(), self.t - s.t
+        t_hit, q_hit, qd_hit = self._predict(walker, q, qd, t_step)
+        touchdown = walker._double_support(q_hit, qd_hit, t_hit)
+        nxt = walker.state  # the re-aimed next step: its start and duration
+        target = walker.step_flow.propagate(nxt.q, nxt.qd, walker.next_period).q
+        start = max(t_step, t_hit - half)
+        q_s, qd_s = (q, qd) if start == t_step else (lambda r: (r.q, r.qd))(walker.flow.propagate(q, qd, start - t_step))
+        correction = _Correction(self, walker, q_s, qd_s, target)
+        z = np.concatenate([[walker.next_period], self._exchange_joints @ touchdown.i_plus / half, touchdown.i_minus / half])
+        z, steps = correction.solve(z)
+        residual, _, forces = correction.evaluate(z)
+        walker.next_period = float(z[0])
+        na = len(self._actuated)
+        return _Plan(touchdown, s.t + start, s.t + t_hit, q_hit, qd_hit, correction.torque(z[1 + na:]),
+                     correction.torque(z[1:1 + na]), float(np.max(np.abs(residual))), steps, friction_ratio(forces))
+
+    # The step ------------------------------------------------------------------------------------
     def walk_step(self, walker: Walker) -> StepOutcome:
         """Walk the walker's current step in MuJoCo until its touchdown (module docstring): its
-        samples, and the walker's touchdown report (its impulses, applied as pulses) with MuJoCo's
-        time, or the fall."""
+        samples, and the walker's touchdown report with MuJoCo's times, or the fall."""
         s = walker.state
         if not self._started:
-            self.set_state(s)
+            self._set(s.q, s.qd, s.t)
             self._started = True
         half = self.pulse_duration / 2
-        period, swing = walker.period, other_side(s.stance_side)
+        period = walker.period
         decide_at = s.t + walker.next_period - half - DECISION_LEAD
-        records = _Records([], [], [], [], [], [], [])
+        t_rows, q_rows, qd_rows, grf_rows = [], [], [], []
         applied: list[AppliedPush] = []
-        decision = None
-        fall = ""
+        plan: _Plan | None = None
         while True:
-            t = self.n * self.h
-            touching = self._touching()
-            landed = self._foot[swing] in touching and t - s.t > 0.5 * period
-            if landed or decision is None and t >= decide_at - 1e-12:
-                if decision is None:
-                    try:
-                        decision = self._decide(walker, s, t)
-                    except Fall as exc:
-                        fall = str(exc)
-                        break
-                if landed:  # the touchdown instant opens the next step
-                    break
-            if self.n % self.per_sample == 0:
-                self._record(records, s.stance_side)
-            if touching - {self._foot["right"], self._foot["left"]}:
-                fall = f"a link touched the ground at t = {t:.4f} s"
+            grid = round(self.t / self.h)
+            if abs(self.t - grid * self.h) < 1e-12 and grid % self.per_sample == 0:
+                t_rows.append(self.t)
+                q_rows.append(self.data.qpos.copy())
+                qd_rows.append(self.data.qvel.copy())
+                grf_rows.append(self._reaction())
+            if plan is None and self.t >= decide_at - 1e-12:
+                try:
+                    plan = self._plan(walker, s)
+                except Fall as exc:
+                    return self._fell(walker, s, t_rows, q_rows, qd_rows, grf_rows, applied, str(exc))
+                self._pulses.append(_Pulse(plan.u_minus, plan.pre_start, math.inf))  # on until the touchdown
+            if self.t - s.t > 2.0 * period:
+                return self._fell(walker, s, t_rows, q_rows, qd_rows, grf_rows, applied,
+                                  f"the swing foot did not land within 2 T = {2 * period:.3f} s")
+            t0, q0, qd0 = self.t, self.data.qpos.copy(), self.data.qvel.copy()
+            t_next = min([(math.floor(self.t / self.h + 1e-9) + 1) * self.h]  # the grid, or a pulse's start or end
+                         + [b for p in self._pulses for b in (p.start, p.end) if b > self.t + 1e-12])
+            push = self._due_push(walker, s, t_next, applied)
+            self._advance(t_next, push)
+            if self.t - s.t > 0.5 * period and self._tip_height() <= 0.0:
+                self._land_on_ground(t0, q0, qd0, push)
+                if plan is None:
+                    return self._fell(walker, s, t_rows, q_rows, qd_rows, grf_rows, applied,
+                                      f"the swing foot landed at t = {self.t:.4f} s, before its double support was planned")
                 break
-            if t - s.t > 0.05 * period and self.data.site_xpos[self._tip[s.stance_side], 2] > FOOT_LIFT:
-                fall = f"the stance foot left the ground at t = {t:.4f} s"
-                break
-            if t - s.t > 2.0 * period:
-                fall = f"the swing foot did not land within 2 T = {2 * period:.3f} s"
-                break
-            self._step(self._due_push(walker, s, t, applied))
-        q, qd, psi, grf = self.model_states(records, s.stance_side, s.heading) if records.t else (None,) * 4
-        samples = [Sample(t_k, t_k - s.t, q[k], qd[k], grf[k], s.step, s.stance_side, s.stance_foot)
-                   for k, t_k in enumerate(records.t)]
-        walker.sample_index += len(samples)
+        samples, fall = self._samples(walker, s, t_rows, q_rows, qd_rows, grf_rows)
         if fall:
             walker._pushes = []
             return StepOutcome(samples, None, fall, tuple(applied))
-        return StepOutcome(samples, self._land(walker, s, decision, records, psi, grf), pushes=tuple(applied))
+        return StepOutcome(samples, self._touchdown(walker, s, plan, grf_rows), pushes=tuple(applied))
 
-    def _due_push(self, walker: Walker, s: WalkState, t: float, applied: list[AppliedPush]) -> np.ndarray | None:
-        """The impulse (N s, world) of the walker's pushes due in the MuJoCo step from ``t``, each
-        reported as applied (its velocity jump the model's at the step's state)."""
+    def _fell(self, walker: Walker, s: WalkState, t_rows, q_rows, qd_rows, grf_rows, applied, reason: str) -> StepOutcome:
+        samples, fall = self._samples(walker, s, t_rows, q_rows, qd_rows, grf_rows)
+        walker._pushes = []
+        return StepOutcome(samples, None, fall or reason, tuple(applied))
+
+    def _samples(self, walker: Walker, s: WalkState, t_rows, q_rows, qd_rows, grf_rows) -> tuple[list[Sample], str]:
+        """The step's samples up to the first that falls (the walker's checks, and the friction
+        cone on MuJoCo's reaction), and the fall's reason ('' for none)."""
+        samples: list[Sample] = []
+        if not t_rows:
+            return samples, ""
+        lowest = walker.samples.dynamics(np.array(q_rows), np.array(qd_rows)).lowest_link
+        for k, t in enumerate(t_rows):
+            sample = Sample(t, t - s.t, q_rows[k], qd_rows[k], grf_rows[k], s.step, s.stance_side, s.stance_foot)
+            samples.append(sample)
+            walker.sample_index += 1
+            fall = walker._fall(sample, float(lowest[k]))
+            fx, fy, fz, _ = sample.grf
+            if not fall and math.hypot(fx, fy) > self.friction * fz:
+                fall = (f"the stance foot slips at t = {t:.4f} s: |F_xy| / F_z = {math.hypot(fx, fy) / fz:.3f} > "
+                        f"mu = {self.friction:g}")
+            if fall:
+                return samples, fall
+        return samples, ""
+
+    def _due_push(self, walker: Walker, s: WalkState, t_next: float, applied: list[AppliedPush]) -> np.ndarray | None:
+        """The impulse (N s, model axes) of the walker's pushes due in the MuJoCo step from now to
+        ``t_next`` (s), each reported as applied (its velocity jump the model's, now)."""
         total = None
-        while walker._pushes and walker._pushes[0].time_in_step < t + self.h - s.t:
+        while walker._pushes and walker._pushes[0].time_in_step < t_next - s.t:
             push = walker._pushes.pop(0)
-            q = self._now(s.stance_side, s.heading)[0]
-            jump = walker.trunk_push.velocity_jump(q[0], push.impulse, s.axes)
-            applied.append(AppliedPush(s.step, s.stance_side, t, t - s.t, push.impulse, jump))
-            total = push.impulse if total is None else total + push.impulse
+            q = self.data.qpos.copy()
+            jump = walker.trunk_push.velocity_jump(q, push.impulse, s.axes)
+            applied.append(AppliedPush(s.step, s.stance_side, self.t, self.t - s.t, push.impulse, jump))
+            impulse = s.axes.T @ np.asarray(push.impulse, float)
+            total = impulse if total is None else total + impulse
         return total
 
-    def _decide(self, walker: Walker, s: WalkState, t: float):
-        """The double support planned from MuJoCo's state at ``t``: the predicted ballistic
-        touchdown, the walker's re-aim and impulses there (the walker's state becomes the
-        predicted next step's), the pre-impact pulse scheduled to end at the predicted touchdown."""
-        q, qd, _, _, _ = self._now(s.stance_side, s.heading)
-        t_hit, q_hit, qd_hit = self._predict(walker, q[0], qd[0], t - s.t)
-        touchdown = walker._double_support(q_hit, qd_hit, t_hit)
+    def _touchdown(self, walker: Walker, s: WalkState, plan: _Plan, grf_rows) -> Touchdown:
+        """MuJoCo's touchdown: the passive impact and the leg exchange, the post-impact pulse, the
+        walker's state made MuJoCo's, the touchdown report with MuJoCo's time."""
         half = self.pulse_duration / 2
-        start = max(t, s.t + t_hit - half)
-        self._pulses.append(_Pulse(self._controls(touchdown.i_minus, s.stance_side) / half, start, start + half))
-        return touchdown, s.t + t_hit, q_hit, qd_hit
-
-    def _land(self, walker: Walker, s: WalkState, decision, records: _Records, psi, grf):
-        """MuJoCo's touchdown: the post-impact pulse scheduled, the walker's state made MuJoCo's
-        (in the next step's frame: its stance foot where MuJoCo put it, its heading turned by the
-        new stance foot's spin), the touchdown report with MuJoCo's time."""
-        touchdown, t_predicted, q_hit, qd_hit = decision
-        t = self.n * self.h
-        half = self.pulse_duration / 2
-        self._pulses.append(_Pulse(self._controls(touchdown.i_plus, s.stance_side) / half, t, t + half))
-        q_td, qd_td, _, _, _ = self._now(s.stance_side, s.heading)
-        nxt = walker.state
-        turn = float(self._now(nxt.stance_side, nxt.heading)[2][0])
-        heading = nxt.heading + (turn if nxt.stance_side == "right" else -turn)
-        q_new, qd_new, _, _, tip = self._now(nxt.stance_side, heading)
-        foot = tip.copy()
-        foot[2] = 0.0
-        walker.state = replace(nxt, q=q_new[0], qd=qd_new[0], t=t, stance_foot=foot, heading=heading)
-        fz = grf[:, 2] if grf is not None else np.zeros(0)
-        horizontal = np.hypot(grf[:, 0], grf[:, 1]) if grf is not None else np.zeros(0)
-        loaded = fz > 1e-3 * self.bm.total_mass * self.bm.params.gravity
-        tips = np.array(records.tip) if records.tip else np.zeros((1, 3))
+        q_c, qd_c, t_c = self.data.qpos.copy(), self.data.qvel.copy(), self.t
+        q_next, qd_next = self.hybrid.exchange.configuration(q_c), self._impact(q_c, qd_c)
+        self._pulses = [_Pulse(plan.u_plus, t_c, t_c + half)]
+        self._set(q_next, qd_next, t_c)
+        tip = s.stance_foot + s.axes @ self.bm.swing_tip(q_c)
+        tip[2] = 0.0
+        side = other_side(s.stance_side)
+        walker.state = replace(walker.state, q=q_next, qd=qd_next, t=t_c, stance_foot=tip,
+                               heading=next_heading(s.heading, side, self.hybrid.exchange.heading(q_c)))
+        grf = np.array(grf_rows) if grf_rows else np.zeros((1, 4))
+        loaded = grf[:, 2] > 0
+        td = plan.touchdown
         self.touchdowns.append(MujocoTouchdown(
-            step=s.step, t=t, t_predicted=t_predicted, q_predicted=q_hit, qd_predicted=qd_hit, q=q_td[0], qd=qd_td[0],
-            peak_torque=float(np.max(np.abs(np.concatenate([touchdown.i_minus, touchdown.i_plus])))) / half,
-            effort_bound=self._effort,
-            friction_used=float(np.max(horizontal[loaded] / fz[loaded])) if np.any(loaded) else math.nan,
-            slip=float(np.max(np.hypot(*(tips[:, :2] - tips[0, :2]).T))),
-            spin=float(np.max(np.abs(psi))) if psi is not None else 0.0))
-        return replace(touchdown, t=t, t_step=t - s.t)
+            step=s.step, t=t_c, t_predicted=plan.t_hit, q_predicted=plan.q_hit, qd_predicted=plan.qd_hit, q=q_c, qd=qd_c,
+            u_minus=plan.u_minus[self._actuated], u_plus=plan.u_plus[self._actuated],
+            effort=float(half * (np.abs(plan.u_minus).sum() + np.abs(plan.u_plus).sum())), impulsive_effort=td.W,
+            residual=plan.residual, corrections=plan.corrections, friction_planned=plan.friction,
+            friction_used=float(np.max(np.hypot(grf[loaded, 0], grf[loaded, 1]) / grf[loaded, 2])) if loaded.any() else math.nan))
+        return replace(td, t=t_c, t_step=t_c - s.t)

@@ -561,11 +561,11 @@ class Walk:
             self.problem = str(exc)
             return
         self.world = WorldView(self.model)
-        stepper = None
+        hybrid, stepper = HybridStep(self.model), None
         if engine == "mujoco":
             from .mujoco_engine import MujocoEngine  # MuJoCo is loaded only for its walks
-            stepper = MujocoEngine(self.model, self.world, rate, pulse_duration)
-        self.walker = Walker(HybridStep(self.model), cycle, rate, reaim, settings, momentum_rate, stepper)
+            stepper = MujocoEngine(hybrid, rate, pulse_duration)
+        self.walker = Walker(hybrid, cycle, rate, reaim, settings, momentum_rate, stepper)
 
     def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
         for item in self.batches():
