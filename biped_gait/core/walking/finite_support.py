@@ -116,15 +116,17 @@ def passive_impact(impact: ImpactMap, qd: np.ndarray) -> Impact:
 
 
 def cone_rows(force: np.ndarray, friction: float) -> np.ndarray:
-    """The inscribed octagonal pyramid of the friction cone on ``force`` (N or N s): values <= 0
-    inside (section 4.4), and -Fz (the normal force positive); none of the cone's for mu = inf."""
-    fx, fy, fz = force
+    """The inscribed octagonal pyramid of the friction cone on ``force`` (N or N s; [Fx, Fy, Fz],
+    or rows of them): values <= 0 inside (section 4.4), and -Fz (the normal force positive); none
+    of the cone's for mu = inf. One row of values per force."""
+    force = np.asarray(force, dtype=float)
+    fx, fy, fz = force[..., 0], force[..., 1], force[..., 2]
     rows = [-fz]
     if math.isfinite(friction):
         apothem = friction * math.cos(math.pi / CONE_SIDES)
         rows += [math.cos(a) * fx + math.sin(a) * fy - apothem * fz
                  for a in 2 * math.pi * np.arange(CONE_SIDES) / CONE_SIDES]
-    return np.array(rows)
+    return np.stack(rows, axis=-1)
 
 
 def friction_ratio(forces: np.ndarray) -> float:

@@ -68,6 +68,7 @@ from .walk import Fall, Sample, StepOutcome, Touchdown, Walker, WalkState
 DECISION_LEAD = 0.01  # s: the double support is planned this long before its pre-impact pulse is due
 TOLERANCE = 1e-7  # m, rad: the corrected pulses land on the re-aimed next step to this (the next re-aim takes the rest)
 CORRECTIONS = 30  # Gauss-Newton steps of the correction at most
+PULSE_STEPS = 8  # RK4 steps of a pulse in the correction's model
 HALVINGS = 12  # of a Gauss-Newton step at most, until the merit falls
 SLACK = 1e-6  # N s, m/s: how far a constraint of the corrected phase may be violated (second-order effects)
 MARGIN = 1e-7  # N s, m/s: the linearized constraints are met with this margin
@@ -141,11 +142,14 @@ class _Correction:
     ``target`` (rad)."""
 
     def __init__(self, engine: "MujocoEngine", walker: Walker, q_s: np.ndarray, qd_s: np.ndarray,
-                 target: np.ndarray) -> None:
+                 target: np.ndarray, phase_jacobian: np.ndarray | None = None) -> None:
         self.hybrid, self.flow = engine.hybrid, walker.step_flow
+        self.coarse = engine.hybrid.flow(walker.settings.coarse_steps)  # the sensitivities' grid
         self.q_s, self.qd_s, self.target = q_s, qd_s, target
         self.duration, self.friction = engine.pulse_duration, engine.friction
         self.actuated, self.na = engine._actuated, len(engine._actuated)
+        # d(next state, tip height, constraints) / d torques: given (the last double support's), or by differences
+        self.phase_jacobian = phase_jacobian
 
     def torque(self, u: np.ndarray) -> np.ndarray:
         """The joint torques (nq, q order, N m) of the actuated joints' ``u``."""
@@ -159,15 +163,15 @@ class _Correction:
         pre-impact pulse's end (m), the constraints of ``evaluate`` and the stance tips' reactions
         at the pulses' nodes (N)."""
         hybrid, bm, half = self.hybrid, self.hybrid.bm, self.duration / 2
-        q_e, qd_e, before = pulse(hybrid, self.q_s, self.qd_s, self.torque(u_minus), half)
+        q_e, qd_e, before = pulse(hybrid, self.q_s, self.qd_s, self.torque(u_minus), half, PULSE_STEPS)
         impact = hybrid.impact(q_e)
         landing = passive_impact(impact, qd_e)
         exchange = hybrid.exchange
         q_p, qd_p, after = pulse(hybrid, exchange.configuration(q_e), exchange.velocity(q_e, landing.xd_plus),
-                                 self.torque(u_plus), half)
+                                 self.torque(u_plus), half, PULSE_STEPS)
         forces = np.vstack([before, after])
         arrival = float(impact.j2[2] @ bm.embed(qd_e))
-        constraints = np.concatenate([*(cone_rows(f * half, self.friction) for f in forces),
+        constraints = np.concatenate([cone_rows(forces * half, self.friction).ravel(),
                                       cone_rows(landing.reaction, self.friction), [-landing.old_foot_vz, arrival]])
         return np.concatenate([q_p, qd_p]), float(bm.swing_tip(q_e)[2]), constraints, forces
 
@@ -183,20 +187,28 @@ class _Correction:
             run = self.flow.propagate(state[:n], state[n:], z[0] - self.duration / 2)
         return np.append(run.q - self.target, height), constraints, forces
 
-    def solve(self, z: np.ndarray) -> tuple[np.ndarray, int]:
-        """z with the equations met to ``TOLERANCE`` and the constraints to ``SLACK``, from ``z``;
-        and the Gauss-Newton steps taken. Each step is the least one (the torques scaled by their
+    def solve(self, z: np.ndarray, guess: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+        """z with the equations met to ``TOLERANCE`` and the constraints to ``SLACK``, from ``z``
+        (or ``z + guess`` if its residual is smaller), and the Gauss-Newton steps taken. Each step is the least one (the torques scaled by their
         largest, tau in s) that meets the linearized equations, moved in their null space to meet
         the linearized constraints (``_project``), halved until the merit sum |residual| +
-        sum max(constraint - SLACK, 0) falls (the Jacobian: ``differences``). ``Fall`` if it does
-        not converge in ``CORRECTIONS`` steps."""
+        sum max(constraint - SLACK, 0) falls. The Jacobian (``differences``): the flow's at each
+        step; the pulsed phase's given (``phase_jacobian``) or at the first step, and again when a
+        step cannot lower the merit.
+        ``Fall`` if it does not converge in ``CORRECTIONS`` steps."""
         residual, constraints, _ = self.evaluate(z)
-        jac = self.differences(z, residual, constraints)
+        if guess is not None:  # the last double support's correction, if it does better
+            trial = self.evaluate(z + guess)
+            if np.max(np.abs(trial[0])) < np.max(np.abs(residual)):
+                z, (residual, constraints, _) = z + guess, trial
+        fresh = self.phase_jacobian is None
+        jac = self.differences(z, residual, constraints, phase=fresh)
 
         def merit(r: np.ndarray, c: np.ndarray) -> float:
             return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
 
-        for steps in range(CORRECTIONS):
+        steps = 0
+        while steps < CORRECTIONS:
             if np.max(np.abs(residual)) < TOLERANCE and np.max(constraints) <= SLACK:
                 return z, steps
             step, now = self._step(jac, z, residual, constraints), merit(residual, constraints)
@@ -206,9 +218,13 @@ class _Correction:
                     break
                 step = step / 2
             else:
-                break
+                if fresh:
+                    break
+                jac, fresh = self.differences(z, residual, constraints), True
+                continue
             z, (residual, constraints, _) = z + step, trial
-            jac = self.differences(z, residual, constraints)
+            steps += 1
+            jac, fresh = self.differences(z, residual, constraints, phase=False), False
         raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next step "
                    f"within the friction cone (residual {np.max(np.abs(residual)):.2e}, constraint "
                    f"{np.max(constraints):.2e})")
@@ -217,22 +233,29 @@ class _Correction:
         """The unknowns' scales: tau in s, the torques in their largest (N m)."""
         return np.append(1.0, np.full(2 * self.na, max(1.0, float(np.max(np.abs(z[1:]))))))
 
-    def differences(self, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> np.ndarray:
-        """d(residual, constraints) / dz: the pulsed phase by forward differences, the flow after it
-        by its sensitivities."""
+    def differences(self, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray,
+                    phase: bool = True) -> np.ndarray:
+        """d(residual, constraints) / dz: the flow after the pulsed phase by its sensitivities at z
+        (on the planner's coarse grid),
+        the phase by forward differences (``phase``), or as the last differences found (short
+        pulses: the phase is nearly linear in the torques)."""
         na, n, half = self.na, self.hybrid.bm.nq, self.duration / 2
         scale = self._scale(z)
         state, height, _, _ = self.phase(z[1:1 + na], z[1 + na:])
-        run = self.flow.propagate(state[:n], state[n:], z[0] - half, np.eye(2 * n))
+        run = self.coarse.propagate(state[:n], state[n:], z[0] - half, np.eye(2 * n))
+        if phase or self.phase_jacobian is None:
+            columns = []
+            for k in range(1, len(z)):
+                dz = np.zeros(len(z))
+                dz[k] = FD_STEP * scale[k]
+                moved, h, c, _ = self.phase(z[1:1 + na] + dz[1:1 + na], z[1 + na:] + dz[1 + na:])
+                columns.append(np.concatenate([moved - state, [h - height], c - constraints]) / dz[k])
+            self.phase_jacobian = np.array(columns).T
+        d_state, d_rest = self.phase_jacobian[:2 * n], self.phase_jacobian[2 * n:]
         jac = np.zeros((len(residual) + len(constraints), len(z)))
         jac[:n, 0] = run.qd
-        for k in range(1, len(z)):
-            dz = np.zeros(len(z))
-            dz[k] = FD_STEP * scale[k]
-            moved, h, c, _ = self.phase(z[1:1 + na] + dz[1:1 + na], z[1 + na:] + dz[1 + na:])
-            jac[:n, k] = run.sens[:n] @ (moved - state) / dz[k]
-            jac[n, k] = (h - height) / dz[k]
-            jac[n + 1:, k] = (c - constraints) / dz[k]
+        jac[:n, 1:] = run.sens[:n] @ d_state
+        jac[n:, 1:] = d_rest
         return jac
 
     def _step(self, jac: np.ndarray, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> np.ndarray:
@@ -289,6 +312,8 @@ class MujocoEngine:
         self.friction = params.friction
         self.t = 0.0  # s, MuJoCo's state's time in the walk
         self._pulses: list[_Pulse] = []
+        self._offset: np.ndarray | None = None  # the last correction less its impulses spread: the next one's guess
+        self._phase_jacobian: np.ndarray | None = None  # the last correction's, the next one's first
         self._started = False
         self.touchdowns: list[MujocoTouchdown] = []
 
@@ -329,9 +354,10 @@ class MujocoEngine:
         MuJoCo's interaction force of the stance shin with the world (the pulses' torques in it)."""
         d = self.data
         mujoco.mj_rnePostConstraint(self.model, d)
-        moment_com, force = d.cfrc_int[self._shin, :3], d.cfrc_int[self._shin, 3:]
-        com = d.subtree_com[self._shin]  # the c-frame's origin; the tip is the world origin
-        return np.array([*force, (moment_com + np.cross(com, force))[2]])
+        wrench = d.cfrc_int[self._shin]  # [moment about the c-frame's origin; force], world axes
+        cx, cy, _ = d.subtree_com[self._shin]  # the c-frame's origin; the tip is the world origin
+        fx, fy, fz = wrench[3:]
+        return np.array([fx, fy, fz, wrench[2] + cx * fy - cy * fx])
 
     def _tip_height(self) -> float:
         return float(self.data.site_xpos[self._swing_tip, 2])
@@ -389,9 +415,11 @@ class MujocoEngine:
         target = walker.step_flow.propagate(nxt.q, nxt.qd, walker.next_period).q
         start = max(t_step, t_hit - half)
         q_s, qd_s = (q, qd) if start == t_step else (lambda r: (r.q, r.qd))(walker.flow.propagate(q, qd, start - t_step))
-        correction = _Correction(self, walker, q_s, qd_s, target)
-        z = np.concatenate([[walker.next_period], self._exchange_joints @ touchdown.i_plus / half, touchdown.i_minus / half])
-        z, steps = correction.solve(z)
+        correction = _Correction(self, walker, q_s, qd_s, target, self._phase_jacobian)
+        spread = np.concatenate([[walker.next_period], self._exchange_joints @ touchdown.i_plus / half,
+                                 touchdown.i_minus / half])
+        z, steps = correction.solve(spread, self._offset)
+        self._offset, self._phase_jacobian = z - spread, correction.phase_jacobian
         residual, _, forces = correction.evaluate(z)
         walker.next_period = float(z[0])
         na = len(self._actuated)
