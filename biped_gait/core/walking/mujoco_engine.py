@@ -513,7 +513,9 @@ class MujocoEngine:
 
     def _touchdown(self, walker: Walker, s: WalkState, plan: _Plan, grf_rows) -> Touchdown:
         """MuJoCo's touchdown: the passive impact and the leg exchange, the post-impact pulse, the
-        walker's state made MuJoCo's, the touchdown report with MuJoCo's time."""
+        walker's state made MuJoCo's; the walker's touchdown report with MuJoCo's time and what
+        the pulses applied (their integrals (d / 2) u as I^-, I^+, their effort E as W; its state
+        error the predicted ballistic touchdown's, as the hybrid walker's)."""
         half = self.pulse_duration / 2
         q_c, qd_c, t_c = self.data.qpos.copy(), self.data.qvel.copy(), self.t
         q_next, qd_next = self.hybrid.exchange.configuration(q_c), self._impact(q_c, qd_c)
@@ -533,4 +535,6 @@ class MujocoEngine:
             effort=float(half * (np.abs(plan.u_minus).sum() + np.abs(plan.u_plus).sum())), impulsive_effort=td.W,
             residual=plan.residual, corrections=plan.corrections, friction_planned=plan.friction,
             friction_used=float(np.max(np.hypot(grf[loaded, 0], grf[loaded, 1]) / grf[loaded, 2])) if loaded.any() else math.nan))
-        return replace(td, t=t_c, t_step=t_c - s.t)
+        # The report carries what was applied: the pulses' integrals (I^+ in this step's joints) and their effort.
+        return replace(td, t=t_c, t_step=t_c - s.t, i_minus=half * plan.u_minus[self._actuated],
+                       i_plus=half * self._exchange_joints.T @ plan.u_plus[self._actuated], W=self.touchdowns[-1].effort)
