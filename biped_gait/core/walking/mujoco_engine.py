@@ -189,20 +189,19 @@ class _Correction:
 
     def solve(self, z: np.ndarray, guess: np.ndarray | None = None) -> tuple[np.ndarray, int]:
         """z with the equations met to ``TOLERANCE`` and the constraints to ``SLACK``, from ``z``
-        (or ``z + guess`` if its residual is smaller), and the Gauss-Newton steps taken. Each step is the least one (the torques scaled by their
-        largest, tau in s) that meets the linearized equations, moved in their null space to meet
-        the linearized constraints (``_project``), halved until the merit sum |residual| +
-        sum max(constraint - SLACK, 0) falls. The Jacobian (``differences``): the flow's at each
-        step; the pulsed phase's given (``phase_jacobian``) or at the first step, and again when a
-        step cannot lower the merit.
+        (or ``z + guess`` if its residual is smaller), and the Gauss-Newton steps taken. Each step
+        is the least one (the torques scaled by their largest, tau in s) that meets the linearized
+        equations, moved in their null space to meet the linearized constraints (``_project``),
+        halved until the merit sum |residual| + sum max(constraint - SLACK, 0) falls. The
+        Jacobian (``differences``): the flow's at each step; the pulsed phase's given
+        (``phase_jacobian``) or at the first step, and again when a step cannot lower the merit.
         ``Fall`` if it does not converge in ``CORRECTIONS`` steps."""
         residual, constraints, _ = self.evaluate(z)
         if guess is not None:  # the last double support's correction, if it does better
             trial = self.evaluate(z + guess)
             if np.max(np.abs(trial[0])) < np.max(np.abs(residual)):
                 z, (residual, constraints, _) = z + guess, trial
-        fresh = self.phase_jacobian is None
-        jac = self.differences(z, residual, constraints, phase=fresh)
+        fresh, jac = self.phase_jacobian is None, None
 
         def merit(r: np.ndarray, c: np.ndarray) -> float:
             return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
@@ -211,6 +210,8 @@ class _Correction:
         while steps < CORRECTIONS:
             if np.max(np.abs(residual)) < TOLERANCE and np.max(constraints) <= SLACK:
                 return z, steps
+            if jac is None:  # the flow's at z; the phase's with it when fresh
+                jac = self.differences(z, residual, constraints, phase=fresh)
             step, now = self._step(jac, z, residual, constraints), merit(residual, constraints)
             for _ in range(HALVINGS):
                 trial = self.evaluate(z + step)
@@ -220,11 +221,10 @@ class _Correction:
             else:
                 if fresh:
                     break
-                jac, fresh = self.differences(z, residual, constraints), True
+                jac, fresh = None, True
                 continue
             z, (residual, constraints, _) = z + step, trial
-            steps += 1
-            jac, fresh = self.differences(z, residual, constraints, phase=False), False
+            steps, fresh, jac = steps + 1, False, None
         raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next step "
                    f"within the friction cone (residual {np.max(np.abs(residual)):.2e}, constraint "
                    f"{np.max(constraints):.2e})")
