@@ -431,8 +431,8 @@ class MujocoEngine:
         """Walk the walker's current step in MuJoCo until its touchdown (module docstring): its
         samples, and the walker's touchdown report with MuJoCo's times, or the fall."""
         s = walker.state
-        if not self._started:
-            self._set(s.q, s.qd, s.t)
+        if not self._started or not (np.array_equal(s.q, self.data.qpos) and np.array_equal(s.qd, self.data.qvel)):
+            self._set(s.q, s.qd, s.t)  # the walk's start, or a state the walker was given (``Walker.shove``)
             self._started = True
         half = self.pulse_duration / 2
         period = walker.period
