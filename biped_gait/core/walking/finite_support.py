@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import null_space
 from scipy.optimize import linprog
 
 from ..dynamics.hybrid import HybridStep, ImpactMap, impact_with
@@ -220,6 +221,71 @@ def _jacobian(f, z: np.ndarray, base: np.ndarray) -> np.ndarray:
         dz[k] = FD_STEP * max(1.0, abs(z[k]))
         columns.append((f(z + dz) - base) / dz[k])
     return np.array(columns).T
+
+
+SLACK = 1e-6  # N s, m/s: how far Gauss-Newton's result may violate a constraint (second-order effects)
+MARGIN = 1e-7  # N s, m/s: Gauss-Newton's steps meet the linearized constraints with this margin
+VIOLATION_COST = 1e3  # per N s (m/s) of a linearized constraint violated, against the step's scaled l1 norm
+GAUSS_NEWTON_STEPS = 30
+HALVINGS = 12  # of a Gauss-Newton step at most, until the merit falls
+
+
+def gauss_newton(evaluate, jacobian, z: np.ndarray, scale: np.ndarray, tolerance: float,
+                 fresh: bool = True) -> tuple[np.ndarray, int]:
+    """z meeting the equations of ``evaluate`` (z -> residual, constraints <= 0, anything) to
+    ``tolerance`` and its constraints to ``SLACK``, from ``z``, and the steps taken. Each step is
+    the least (in units of ``scale``, one per unknown) that meets the linearized equations, moved
+    in their null space by the least (l1) that meets the linearized constraints (with ``MARGIN``;
+    their violations paid at ``VIOLATION_COST``: a linear program), halved until the merit
+    sum |residual| + sum max(constraint - SLACK, 0) falls. ``jacobian(z, residual, constraints,
+    fresh)``: d(residual, constraints) / dz, ``fresh`` asking for all of it anew (else it may reuse
+    what does not change much); asked fresh again when a step cannot lower the merit.
+    ``FiniteSupportFailed`` if no step can, or after ``GAUSS_NEWTON_STEPS``."""
+    residual, constraints, _ = evaluate(z)
+
+    def merit(r: np.ndarray, c: np.ndarray) -> float:
+        return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
+
+    jac, steps = None, 0
+    while steps < GAUSS_NEWTON_STEPS:
+        if np.max(np.abs(residual)) < tolerance and np.max(constraints) <= SLACK:
+            return z, steps
+        if jac is None:
+            jac = jacobian(z, residual, constraints, fresh)
+        scaled = jac * scale
+        j_eq, j_in = scaled[:len(residual)], scaled[len(residual):]
+        y = np.linalg.lstsq(j_eq, -residual, rcond=None)[0]
+        free = null_space(j_eq)
+        y = y + free @ _least_move(j_in @ free, -constraints - j_in @ y - MARGIN)
+        step, now = scale * y, merit(residual, constraints)
+        for _ in range(HALVINGS):
+            with np.errstate(all="ignore"):
+                trial = evaluate(z + step)
+            if merit(trial[0], trial[1]) < now:
+                break
+            step = step / 2
+        else:
+            if fresh:
+                break
+            jac, fresh = None, True
+            continue
+        z, (residual, constraints, _) = z + step, trial
+        steps, fresh, jac = steps + 1, False, None
+    raise FiniteSupportFailed(f"Gauss-Newton stalls at residual {np.max(np.abs(residual)):.2e}, "
+                              f"constraint {np.max(constraints):.2e}")
+
+
+def _least_move(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The w of least l1 norm with a w <= b, its violations paid at ``VIOLATION_COST`` (HiGHS;
+    w = 0 when it meets them)."""
+    m, k = a.shape
+    if np.all(b >= 0.0):
+        return np.zeros(k)
+    cost = np.concatenate([np.ones(2 * k), np.full(m, VIOLATION_COST)])
+    lp = linprog(cost, A_ub=np.hstack([a, -a, -np.eye(m)]), b_ub=b, bounds=(0, None), method="highs")
+    if lp.status != 0:
+        raise FiniteSupportFailed(f"the linearized constraints have no least move ({lp.message})")
+    return lp.x[:k] - lp.x[k:2 * k]
 
 
 FIRST_DURATION = 2.5e-4  # s: the continuation in d starts here, from the impulsive gait

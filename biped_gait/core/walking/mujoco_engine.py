@@ -54,25 +54,19 @@ from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
-from scipy.linalg import null_space
-from scipy.optimize import brentq, linprog
+from scipy.optimize import brentq
 
 from ..dynamics.hybrid import HybridStep, impact_with
 from ..model.biped import STANCE_TIP, SWING_TIP
 from ..model.exchange import exchange_matrix, next_heading, other_side
 from ..model.mjcf import TIMESTEP, make_mjcf
-from .finite_support import FD_STEP, cone_rows, friction_ratio, passive_impact, pulse
+from .finite_support import FD_STEP, FiniteSupportFailed, cone_rows, friction_ratio, gauss_newton, passive_impact, pulse
 from .push import AppliedPush
 from .walk import Fall, Sample, StepOutcome, Touchdown, Walker, WalkState
 
 DECISION_LEAD = 0.01  # s: the double support is planned this long before its pre-impact pulse is due
 TOLERANCE = 1e-7  # m, rad: the corrected pulses land on the re-aimed next step to this (the next re-aim takes the rest)
-CORRECTIONS = 30  # Gauss-Newton steps of the correction at most
 PULSE_STEPS = 8  # RK4 steps of a pulse in the correction's model
-HALVINGS = 12  # of a Gauss-Newton step at most, until the merit falls
-SLACK = 1e-6  # N s, m/s: how far a constraint of the corrected phase may be violated (second-order effects)
-MARGIN = 1e-7  # N s, m/s: the linearized constraints are met with this margin
-VIOLATION_COST = 1e3  # per N s of a constraint violated (slack) against the step's norm (scaled)
 
 
 @dataclass(frozen=True)
@@ -188,59 +182,34 @@ class _Correction:
         return np.append(run.q - self.target, height), constraints, forces
 
     def solve(self, z: np.ndarray, guess: np.ndarray | None = None) -> tuple[np.ndarray, int]:
-        """z with the equations met to ``TOLERANCE`` and the constraints to ``SLACK``, from ``z``
-        (or ``z + guess`` if its residual is smaller), and the Gauss-Newton steps taken. Each step
-        is the least one (the torques scaled by their largest, tau in s) that meets the linearized
-        equations, moved in their null space to meet the linearized constraints (``_project``),
-        halved until the merit sum |residual| + sum max(constraint - SLACK, 0) falls. The
-        Jacobian (``differences``): the flow's at each step; the pulsed phase's given
-        (``phase_jacobian``) or at the first step, and again when a step cannot lower the merit.
-        ``Fall`` if it does not converge in ``CORRECTIONS`` steps."""
-        residual, constraints, _ = self.evaluate(z)
+        """z with the equations met to ``TOLERANCE`` and the constraints, from ``z`` (or
+        ``z + guess`` if its residual is smaller), and the Gauss-Newton steps taken
+        (``finite_support.gauss_newton``; the torques scaled by their largest, tau in s; the
+        Jacobian ``differences``: the flow's at each step, the pulsed phase's given
+        (``phase_jacobian``) or at the first step, and again when a step cannot lower the merit).
+        ``Fall`` if it does not converge."""
         if guess is not None:  # the last double support's correction, if it does better
-            trial = self.evaluate(z + guess)
-            if np.max(np.abs(trial[0])) < np.max(np.abs(residual)):
-                z, (residual, constraints, _) = z + guess, trial
-        fresh, jac = self.phase_jacobian is None, None
+            if np.max(np.abs(self.evaluate(z + guess)[0])) < np.max(np.abs(self.evaluate(z)[0])):
+                z = z + guess
+        try:
+            return gauss_newton(self.evaluate, lambda x, r, c, fresh: self.differences(x, r, c, phase=fresh), z,
+                                self.scale(z),
+                                TOLERANCE, fresh=self.phase_jacobian is None)
+        except FiniteSupportFailed as exc:
+            raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next "
+                       f"step within the friction cone: {exc}") from None
 
-        def merit(r: np.ndarray, c: np.ndarray) -> float:
-            return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
-
-        steps = 0
-        while steps < CORRECTIONS:
-            if np.max(np.abs(residual)) < TOLERANCE and np.max(constraints) <= SLACK:
-                return z, steps
-            if jac is None:  # the flow's at z; the phase's with it when fresh
-                jac = self.differences(z, residual, constraints, phase=fresh)
-            step, now = self._step(jac, z, residual, constraints), merit(residual, constraints)
-            for _ in range(HALVINGS):
-                trial = self.evaluate(z + step)
-                if merit(trial[0], trial[1]) < now:
-                    break
-                step = step / 2
-            else:
-                if fresh:
-                    break
-                jac, fresh = None, True
-                continue
-            z, (residual, constraints, _) = z + step, trial
-            steps, fresh, jac = steps + 1, False, None
-        raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next step "
-                   f"within the friction cone (residual {np.max(np.abs(residual)):.2e}, constraint "
-                   f"{np.max(constraints):.2e})")
-
-    def _scale(self, z: np.ndarray) -> np.ndarray:
-        """The unknowns' scales: tau in s, the torques in their largest (N m)."""
+    def scale(self, z: np.ndarray) -> np.ndarray:
+        """The unknowns' units: tau in s, the torques in their largest (N m)."""
         return np.append(1.0, np.full(2 * self.na, max(1.0, float(np.max(np.abs(z[1:]))))))
 
     def differences(self, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray,
                     phase: bool = True) -> np.ndarray:
         """d(residual, constraints) / dz: the flow after the pulsed phase by its sensitivities at z
-        (on the planner's coarse grid),
-        the phase by forward differences (``phase``), or as the last differences found (short
-        pulses: the phase is nearly linear in the torques)."""
+        (on the planner's coarse grid), the phase by forward differences (``phase``), or as the
+        last differences found (short pulses: the phase is nearly linear in the torques)."""
         na, n, half = self.na, self.hybrid.bm.nq, self.duration / 2
-        scale = self._scale(z)
+        scale = self.scale(z)
         state, height, _, _ = self.phase(z[1:1 + na], z[1 + na:])
         run = self.coarse.propagate(state[:n], state[n:], z[0] - half, np.eye(2 * n))
         if phase or self.phase_jacobian is None:
@@ -257,32 +226,6 @@ class _Correction:
         jac[:n, 1:] = run.sens[:n] @ d_state
         jac[n:, 1:] = d_rest
         return jac
-
-    def _step(self, jac: np.ndarray, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> np.ndarray:
-        """The Gauss-Newton step (``solve``) with the Jacobian ``jac``: the least (scaled) that meets
-        the linearized equations, then moved in their null space by the least that meets the
-        linearized constraints."""
-        scale = self._scale(z)
-        scaled = jac * scale
-        j_eq, j_in = scaled[:len(residual)], scaled[len(residual):]
-        y = np.linalg.lstsq(j_eq, -residual, rcond=None)[0]
-        free = null_space(j_eq)
-        y = y + free @ self._project(j_in @ free, -constraints - j_in @ y - MARGIN)
-        return scale * y
-
-    @staticmethod
-    def _project(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """The w of least l1 norm with a w <= b, its violations paid at ``VIOLATION_COST`` (a linear
-        program, HiGHS; w = 0 when it meets them)."""
-        m, k = a.shape
-        if np.all(b >= 0.0):
-            return np.zeros(k)
-        cost = np.concatenate([np.ones(2 * k), np.full(m, VIOLATION_COST)])
-        lp = linprog(cost, A_ub=np.hstack([a, -a, -np.eye(m)]), b_ub=b, bounds=(0, None), method="highs")
-        if lp.status != 0:
-            raise Fall(f"the double support's constraints cannot be linearized ({lp.message})")
-        return lp.x[:k] - lp.x[k:2 * k]
-
 
 class MujocoEngine:
     """Walks a ``Walker``'s steps in MuJoCo (module docstring): ``walk_step(walker)`` in place of
