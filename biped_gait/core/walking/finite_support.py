@@ -144,7 +144,9 @@ class FiniteSupport:
     theta (rad), the torques u^+ and u^- (N m, the actuated joints), the state at the decision
     point (the pre-impact pulse's start, T - d/2), the effort E (N m s) beside the impulsive gait's
     W, the friction the phase needs (the largest |F_xy| / F_z at the stance foot over both pulses,
-    and of the impact's reaction impulse), the largest torque (N m), the periodicity's residual."""
+    and of the impact's reaction impulse), the largest torque (N m), the periodicity's residual,
+    and whether E is the least (the sequential LPs converged; else the periodic phase Gauss-Newton
+    found nearest the shorter phase's, its effort not minimized)."""
 
     duration: float
     period: float
@@ -163,6 +165,7 @@ class FiniteSupport:
     peak_torque: float
     residual: float
     iterations: int
+    minimized: bool = True
 
     @property
     def ballistic(self) -> float:
@@ -194,6 +197,15 @@ class _Periodic:
     def boundary(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
         g = self.gait
         return self.configurations(g.step_length, g.arm_amplitude, g.mode, theta, g.problem.step_width)
+
+    def scale(self, z: np.ndarray) -> np.ndarray:
+        """The unknowns' units for Gauss-Newton: rad/s, rad, and the largest torque (N m)."""
+        return np.concatenate([np.ones(self.n + 1), np.full(2 * self.na, max(1.0, float(np.max(np.abs(z[self.free:])))))])
+
+    def stacked(self, z: np.ndarray) -> np.ndarray:
+        """The residual and the constraints of ``evaluate``, one vector."""
+        residual, constraints, _ = self.evaluate(z)
+        return np.concatenate([residual, constraints])
 
     def evaluate(self, z: np.ndarray):
         """The residual (2 nq), the constraints (<= 0) and what the plan reports, at z."""
@@ -292,13 +304,20 @@ FIRST_DURATION = 2.5e-4  # s: the continuation in d starts here, from the impuls
 LINE_SEARCH = 8  # shrinkings of the trust region per linear program at most
 PENALTY = 1e4  # N m s per unit of residual (rad, rad/s) or of a violated constraint (N, N s, m/s)
 RADIUS = 0.5  # the trust region's largest radius: rad/s, rad, and fractions of the largest torque
+DESCENT_STEPS = 12  # of the effort's descent at most, at the duration asked
+PASSING_DESCENT = 4  # at the continuation's durations on the way (keeping to the low-effort branch)
+DESCENT_GAIN = 1e-4  # relative: the descent stops when a step lowers E by less
 
 
-def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float) -> FiniteSupport:
+def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float,
+                        descent_steps: int = DESCENT_STEPS) -> FiniteSupport:
     """The periodic gait of ``gait`` (an impulsive plan, admissible) with a double support of
     ``duration`` s (module docstring), by continuation in d from ``FIRST_DURATION`` (doubling; the
-    torques scaled to keep their integrals); ``FiniteSupportFailed`` if a linear program fails or
-    the iterations do not reach ``TOLERANCE``."""
+    torques scaled to keep their integrals): the least effort by sequential linear programs while
+    they converge; from the first duration where they stall, the periodic phase by Gauss-Newton
+    (``_restore``) and its effort lowered along the periodic phases (``_descend``, at most
+    ``descent_steps`` at ``duration``, ``PASSING_DESCENT`` on the way; ``FiniteSupport.minimized``
+    false). ``FiniteSupportFailed`` if Gauss-Newton cannot meet the equations."""
     if not duration > 0 or not duration < gait.period:
         raise ValueError(f"the double support's duration must be in (0, T = {gait.period:g}) s, got {duration:g} s")
     bm = hybrid.bm
@@ -313,11 +332,68 @@ def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float) -> Fini
     stages = [first]
     while stages[-1] < duration:
         stages.append(min(duration, 2 * stages[-1]))
+    minimized = True  # while the sequential LPs converge; after that, Gauss-Newton and the descent
     for k, stage in enumerate(stages):
         if k:
             z[n + 1:] *= stages[k - 1] / stage
-        z, iterations = _sequential_lp(_Periodic(hybrid, gait, stage), z)
-    return _finish(_Periodic(hybrid, gait, duration), z, iterations)
+        eq = _Periodic(hybrid, gait, stage)
+        if minimized:
+            try:
+                z, iterations = _sequential_lp(eq, z)
+                continue
+            except FiniteSupportFailed:
+                minimized = False
+        z, iterations = _descend(eq, _restore(eq, z), descent_steps if stage == duration else PASSING_DESCENT)
+    return _finish(_Periodic(hybrid, gait, duration), z, iterations, minimized)
+
+
+
+
+def _restore(eq: _Periodic, z: np.ndarray) -> np.ndarray:
+    """The periodic phase nearest ``z`` (``gauss_newton``, its Jacobian by differences)."""
+    def jacobian(x: np.ndarray, residual: np.ndarray, constraints: np.ndarray, fresh: bool) -> np.ndarray:
+        return _jacobian(eq.stacked, x, np.concatenate([residual, constraints]))
+
+    return gauss_newton(eq.evaluate, jacobian, z, eq.scale(z), TOLERANCE)[0]
+
+
+def _descend(eq: _Periodic, z: np.ndarray, most: int) -> tuple[np.ndarray, int]:
+    """From the periodic phase ``z``, lower its effort E along the periodic phases: each step goes
+    down E's gradient projected on the null space of the equations' Jacobian (scaled), by a
+    length that grows by half after a success and halves after a failure, and ``_restore`` brings
+    it back onto the equations (and the constraints); kept if E fell. Until a step gains less than
+    ``DESCENT_GAIN``, or ``most`` steps: towards a local minimum of E over the periodic phases. The
+    descent's steps taken, beside z."""
+    half, free = eq.duration / 2, eq.free
+
+    def effort(x: np.ndarray) -> float:
+        return float(half * np.abs(x[free:]).sum())
+
+    length, steps = 0.05, 0
+    for steps in range(1, most + 1):
+        residual, constraints, _ = eq.evaluate(z)
+        scale = eq.scale(z)
+        jac = _jacobian(eq.stacked, z, np.concatenate([residual, constraints]))[:len(residual)] * scale
+        gradient = np.zeros(len(z))
+        gradient[free:] = half * np.sign(z[free:]) * scale[free:]
+        basis = null_space(jac)
+        direction = -basis @ (basis.T @ gradient)
+        direction /= max(np.max(np.abs(direction)), 1e-300)
+        now = effort(z)
+        while length > 1e-4:
+            try:
+                trial = _restore(eq, z + length * scale * direction)
+            except FiniteSupportFailed:
+                trial = None
+            if trial is not None and effort(trial) < now:
+                z, length = trial, 1.5 * length
+                break
+            length /= 2
+        else:
+            break
+        if now - effort(z) < DESCENT_GAIN * now:
+            break
+    return z, steps
 
 
 def _merit(eq: _Periodic, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> float:
@@ -384,7 +460,7 @@ def _sequential_lp(eq, z: np.ndarray, tolerance: float = TOLERANCE) -> tuple[np.
                               f"{SLP_ITERATIONS} linear programs")
 
 
-def _finish(eq: _Periodic, z: np.ndarray, iterations: int) -> FiniteSupport:
+def _finish(eq: _Periodic, z: np.ndarray, iterations: int, minimized: bool) -> FiniteSupport:
     residual, constraints, (q0, q_t, qd_t, q_dec, qd_dec, forces, landing) = eq.evaluate(z)
     v0, theta, u_plus, u_minus = eq.split(z)
     gait, duration, half = eq.gait, eq.duration, eq.duration / 2
@@ -394,5 +470,5 @@ def _finish(eq: _Periodic, z: np.ndarray, iterations: int) -> FiniteSupport:
         effort=float(half * (np.abs(u_plus).sum() + np.abs(u_minus).sum())), impulsive_effort=gait.W,
         friction_needed=max(friction_ratio(forces), friction_ratio(landing.reaction[None, :])),
         peak_torque=float(np.max(np.abs(np.concatenate([u_plus, u_minus])))),
-        residual=float(np.max(np.abs(residual))), iterations=iterations,
+        residual=float(np.max(np.abs(residual))), iterations=iterations, minimized=minimized,
     )
