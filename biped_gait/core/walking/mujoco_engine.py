@@ -20,29 +20,31 @@ positive, within the friction cone of the parameter set (``Fall`` otherwise).
 
 **The double support** (the phase of docs/model.md section 10, walked): around each touchdown,
 
-- the pre-impact pulse: constant torques u^- over the d / 2 s before the predicted touchdown (the
-  old stance foot on the ground);
-- the passive impact, where MuJoCo's swing tip reaches the floor (located to 1e-12 m by
-  re-integrating MuJoCo's last step in part): eqs. (8)-(9) with MuJoCo's D_e and J2 (the
-  ``extended`` export), then the leg exchange;
+- the pre-impact pulse: constant torques u^- from d / 2 s before the predicted touchdown until
+  MuJoCo's (the old stance foot on the ground);
+- the passive impact, where MuJoCo's swing tip reaches the floor (located by Brent's method on
+  MuJoCo's last step redone in part): eqs. (8)-(9) with MuJoCo's D_e and J2 (the ``extended``
+  export), then the leg exchange;
 - the post-impact pulse: constant torques u^+ over the first d / 2 s of the next step.
 
-MuJoCo holds a control constant over its step, so a step a pulse covers in part gets its torque
-times the fraction covered: each pulse's integral is exact.
+MuJoCo's steps are split where a pulse starts or ends: each sees one constant torque.
 
 **The feedback** (``_plan``). ``DECISION_LEAD`` s before the pre-impact pulse is due (the last
-re-aim's duration tells when), the engine reads MuJoCo's state, predicts the ballistic touchdown
+re-aim's duration tells when; the planner's model again at mid-step and after a push), the engine reads MuJoCo's state, predicts the ballistic touchdown
 with the planner's flow and guard, and hands that pre-impact state to the walker's double support
 (``Walker._double_support``): the re-aim of the next step (with momentum steering if the walker
 has it) and the LP's impulses I^-, I^+, exactly as the hybrid walker does at its touchdown. The
 pulses u = I / (d / 2) reach that re-aimed next step only as d -> 0: the configuration moves
 during them (the joints at up to 16 rad/s), and the open-loop step amplifies the difference.
-So the torques are corrected, with the planner's model, until the pulsed phase lands on the
-re-aimed next step: unknowns the torques u^- and u^+ (2 nA) and the next step's duration tau;
-equations: the swing tip on the ground at the pre-impact pulse's end (1), and the next step's
-configuration at tau the re-aimed one's at its touchdown (nq); Gauss-Newton steps of least norm
-(the torques scaled by their largest), from the impulses spread, to ``TOLERANCE``. The next step
-then starts from whatever MuJoCo made of the pulses.
+So the torques are corrected, with the planner's model (``_Correction``), until the pulsed phase
+lands on the re-aimed next step: unknowns the torques u^- and u^+ (2 nA) and the next step's
+duration tau; equations: the swing tip on the ground at the pre-impact pulse's end (1), and the
+next step's configuration at tau the re-aimed one's at its touchdown (nq); constraints: the
+stance tip's reaction in the friction cone (the inscribed octagonal pyramid) with a positive
+normal force at every node of both pulses, the impact's reaction likewise, the old stance foot
+leaving, the swing tip coming down; Gauss-Newton (``finite_support.gauss_newton``: least-norm
+steps, the constraints' least move) from the impulses spread plus the last correction's offset
+from its own, to ``TOLERANCE``. The next step then starts from whatever MuJoCo made of the pulses.
 
 Units SI, rad; times in the walk (s) unless said "in the step".
 """
@@ -57,7 +59,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..dynamics.hybrid import HybridStep, impact_with
-from ..model.biped import STANCE_TIP, SWING_TIP
+from ..model.biped import SWING_TIP
 from ..model.exchange import exchange_matrix, next_heading, other_side
 from ..model.mjcf import TIMESTEP, make_mjcf
 from .finite_support import FD_STEP, FiniteSupportFailed, cone_rows, friction_ratio, gauss_newton, passive_impact, pulse
@@ -75,7 +77,7 @@ class MujocoTouchdown:
     walk); the planner's predicted ballistic touchdown from the decision's state (time in the walk,
     q, qd); MuJoCo's pre-impact state (q, qd, after the pre-impact pulse); the torques u^- (this
     step's actuated joints) and u^+ (the next step's), N m; their effort E = (d / 2) sum |u|
-    (N m s) beside the impulses' W; the correction's residual (m, rad) and linear programs; the
+    (N m s) beside the impulses' W; the correction's residual (m, rad) and Gauss-Newton steps; the
     friction the planned phase needs (the largest |F_xy| / F_z at the pulses' nodes in the planner's
     model) and the largest |F_xy| / F_z of MuJoCo's stance-tip reaction over the step's samples."""
 
@@ -113,9 +115,9 @@ class _Pulse:
 @dataclass(frozen=True)
 class _Plan:
     """A planned double support: the walker's touchdown report, the pre-impact pulse's start (s in
-    the walk), the predicted ballistic touchdown
-    (time in the walk, q, qd), the corrected torques (N m, full q vectors: this step's u^-, the
-    next step's u^+), the correction's residual and steps."""
+    the walk), the predicted ballistic touchdown (time in the walk, q, qd), the corrected torques
+    (N m, full q vectors: this step's u^-, the next step's u^+), the correction's residual and
+    steps, and the friction its pulses need (the largest |F_xy| / F_z at their nodes)."""
 
     touchdown: Touchdown
     pre_start: float
@@ -193,8 +195,7 @@ class _Correction:
                 z = z + guess
         try:
             return gauss_newton(self.evaluate, lambda x, r, c, fresh: self.differences(x, r, c, phase=fresh), z,
-                                self.scale(z),
-                                TOLERANCE, fresh=self.phase_jacobian is None)
+                                self.scale(z), TOLERANCE, fresh=self.phase_jacobian is None)
         except FiniteSupportFailed as exc:
             raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next "
                        f"step within the friction cone: {exc}") from None
@@ -226,6 +227,7 @@ class _Correction:
         jac[:n, 1:] = run.sens[:n] @ d_state
         jac[n:, 1:] = d_rest
         return jac
+
 
 class MujocoEngine:
     """Walks a ``Walker``'s steps in MuJoCo (module docstring): ``walk_step(walker)`` in place of
@@ -316,8 +318,8 @@ class MujocoEngine:
             self._advance(t, push)
             return self._tip_height()
 
-        t_c = t1 if height(t0 + 1e-15) <= 0.0 else brentq(height, t0 + 1e-15, t1, xtol=1e-15, rtol=1e-15)
-        height(t_c)
+        start = t0 + 1e-15
+        height(start if height(start) <= 0.0 else brentq(height, start, t1, xtol=1e-15, rtol=1e-15))
 
     def _impact(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The passive impact (eqs. 8-9) at ``q`` from ``qd`` with MuJoCo's D_e and J2 (the
@@ -357,7 +359,10 @@ class MujocoEngine:
         nxt = walker.state  # the re-aimed next step: its start and duration
         target = walker.step_flow.propagate(nxt.q, nxt.qd, walker.next_period).q
         start = max(t_step, t_hit - half)
-        q_s, qd_s = (q, qd) if start == t_step else (lambda r: (r.q, r.qd))(walker.flow.propagate(q, qd, start - t_step))
+        q_s, qd_s = q, qd
+        if start > t_step:  # the planner's state where the pre-impact pulse starts
+            run = walker.flow.propagate(q, qd, start - t_step)
+            q_s, qd_s = run.q, run.qd
         correction = _Correction(self, walker, q_s, qd_s, target, self._phase_jacobian)
         spread = np.concatenate([[walker.next_period], self._exchange_joints @ touchdown.i_plus / half,
                                  touchdown.i_minus / half])
@@ -404,6 +409,13 @@ class MujocoEngine:
                          + [b for p in self._pulses for b in (p.start, p.end) if b > self.t + 1e-12])
             push = self._due_push(walker, s, t_next, applied)
             self._advance(t_next, push)
+            if plan is None and (push is not None or t0 - s.t < 0.5 * period <= self.t - s.t):
+                # after a push, and at mid-step: when the touchdown is due, from the planner's model
+                try:
+                    t_hit = self._predict(walker, self.data.qpos.copy(), self.data.qvel.copy(), self.t - s.t)[0]
+                except Fall as exc:
+                    return self._fell(walker, s, t_rows, q_rows, qd_rows, grf_rows, applied, str(exc))
+                decide_at = s.t + t_hit - half - DECISION_LEAD
             if self.t - s.t > 0.5 * period and self._tip_height() <= 0.0:
                 self._land_on_ground(t0, q0, qd0, push)
                 if plan is None:
@@ -414,7 +426,8 @@ class MujocoEngine:
         if fall:
             walker._pushes = []
             return StepOutcome(samples, None, fall, tuple(applied))
-        return StepOutcome(samples, self._touchdown(walker, s, plan, grf_rows), pushes=tuple(applied))
+        touchdown = self._touchdown(walker, s, plan, grf_rows, applied)
+        return StepOutcome(samples, touchdown, pushes=tuple(applied))
 
     def _fell(self, walker: Walker, s: WalkState, t_rows, q_rows, qd_rows, grf_rows, applied, reason: str) -> StepOutcome:
         samples, fall = self._samples(walker, s, t_rows, q_rows, qd_rows, grf_rows)
@@ -454,13 +467,18 @@ class MujocoEngine:
             total = impulse if total is None else total + impulse
         return total
 
-    def _touchdown(self, walker: Walker, s: WalkState, plan: _Plan, grf_rows) -> Touchdown:
-        """MuJoCo's touchdown: the passive impact and the leg exchange, the post-impact pulse, the
-        walker's state made MuJoCo's; the walker's touchdown report with MuJoCo's time and what
+    def _touchdown(self, walker: Walker, s: WalkState, plan: _Plan, grf_rows, applied: list[AppliedPush]) -> Touchdown:
+        """MuJoCo's touchdown: the pushes still due acting on it (``applied``), the passive impact
+        and the leg exchange, the post-impact pulse, the walker's state made MuJoCo's; the walker's touchdown report with MuJoCo's time and what
         the pulses applied (their integrals (d / 2) u as I^-, I^+, their effort E as W; its state
         error the predicted ballistic touchdown's, as the hybrid walker's)."""
         half = self.pulse_duration / 2
         q_c, qd_c, t_c = self.data.qpos.copy(), self.data.qvel.copy(), self.t
+        for push in walker._pushes:  # due after the touchdown: they act on it (as the hybrid walker's)
+            jump = walker.trunk_push.velocity_jump(q_c, push.impulse, s.axes)
+            applied.append(AppliedPush(s.step, s.stance_side, t_c, t_c - s.t, push.impulse, jump))
+            qd_c = qd_c + jump
+        walker._pushes = []
         q_next, qd_next = self.hybrid.exchange.configuration(q_c), self._impact(q_c, qd_c)
         self._pulses = [_Pulse(plan.u_plus, t_c, t_c + half)]
         self._set(q_next, qd_next, t_c)
