@@ -242,11 +242,11 @@ GAUSS_NEWTON_STEPS = 30
 HALVINGS = 12  # of a Gauss-Newton step at most, until the merit falls
 
 
-def gauss_newton(evaluate, jacobian, z: np.ndarray, scale: np.ndarray, tolerance: float,
+def gauss_newton(evaluate, jacobian, z: np.ndarray, scale, tolerance: float,
                  fresh: bool = True) -> tuple[np.ndarray, int]:
     """z meeting the equations of ``evaluate`` (z -> residual, constraints <= 0, anything) to
     ``tolerance`` and its constraints to ``SLACK``, from ``z``, and the steps taken. Each step is
-    the least (in units of ``scale``, one per unknown) that meets the linearized equations, moved
+    the least (in the units ``scale(z)`` gives, one per unknown) that meets the linearized equations, moved
     in their null space by the least (l1) that meets the linearized constraints (with ``MARGIN``;
     their violations paid at ``VIOLATION_COST``: a linear program), halved until the merit
     sum |residual| + sum max(constraint - SLACK, 0) falls. ``jacobian(z, residual, constraints,
@@ -263,13 +263,18 @@ def gauss_newton(evaluate, jacobian, z: np.ndarray, scale: np.ndarray, tolerance
         if np.max(np.abs(residual)) < tolerance and np.max(constraints) <= SLACK:
             return z, steps
         if jac is None:
-            jac = jacobian(z, residual, constraints, fresh)
-        scaled = jac * scale
+            with np.errstate(all="ignore"):
+                jac = jacobian(z, residual, constraints, fresh)
+            if not np.all(np.isfinite(jac)):
+                raise FiniteSupportFailed(f"Gauss-Newton's Jacobian is not finite at residual "
+                                          f"{np.max(np.abs(residual)):.2e}")
+        units = scale(z)
+        scaled = jac * units
         j_eq, j_in = scaled[:len(residual)], scaled[len(residual):]
         y = np.linalg.lstsq(j_eq, -residual, rcond=None)[0]
         free = null_space(j_eq)
         y = y + free @ _least_move(j_in @ free, -constraints - j_in @ y - MARGIN)
-        step, now = scale * y, merit(residual, constraints)
+        step, now = units * y, merit(residual, constraints)
         for _ in range(HALVINGS):
             with np.errstate(all="ignore"):
                 trial = evaluate(z + step)
@@ -354,7 +359,7 @@ def _restore(eq: _Periodic, z: np.ndarray) -> np.ndarray:
     def jacobian(x: np.ndarray, residual: np.ndarray, constraints: np.ndarray, fresh: bool) -> np.ndarray:
         return _jacobian(eq.stacked, x, np.concatenate([residual, constraints]))
 
-    return gauss_newton(eq.evaluate, jacobian, z, eq.scale(z), TOLERANCE)[0]
+    return gauss_newton(eq.evaluate, jacobian, z, eq.scale, TOLERANCE)[0]
 
 
 def _descend(eq: _Periodic, z: np.ndarray, most: int) -> tuple[np.ndarray, int]:

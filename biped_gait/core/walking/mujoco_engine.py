@@ -195,7 +195,7 @@ class _Correction:
                 z = z + guess
         try:
             return gauss_newton(self.evaluate, lambda x, r, c, fresh: self.differences(x, r, c, phase=fresh), z,
-                                self.scale(z), TOLERANCE, fresh=self.phase_jacobian is None)
+                                self.scale, TOLERANCE, fresh=self.phase_jacobian is None)
         except FiniteSupportFailed as exc:
             raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next "
                        f"step within the friction cone: {exc}") from None
