@@ -259,9 +259,11 @@ def gauss_newton(evaluate, jacobian, z: np.ndarray, scale, tolerance: float,
         return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
 
     jac, steps = None, 0
-    while steps < GAUSS_NEWTON_STEPS:
+    while True:
         if np.max(np.abs(residual)) < tolerance and np.max(constraints) <= SLACK:
             return z, steps
+        if steps == GAUSS_NEWTON_STEPS:
+            break
         if jac is None:
             with np.errstate(all="ignore"):
                 jac = jacobian(z, residual, constraints, fresh)
