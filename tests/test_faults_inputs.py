@@ -68,6 +68,8 @@ CASES = [
     ("biped-gait-simulator", ["--ros-args", "-p", "pushes:=2 1.5 1 0 0"], "parameter pushes: the phase must be in [0, 1)"),
     ("biped-gait-simulator", ["--ros-args", "-p", "recovery:=prayer"], "parameter recovery: must be one of momentum"),
     ("biped-gait-simulator", ["--ros-args", "-p", "momentum_rate:=1.5"], "parameter momentum_rate: must be in [0, 0.99]"),
+    ("biped-gait-simulator", ["--ros-args", "-p", "engine:=ode"], "parameter engine: must be one of hybrid, mujoco"),
+    ("biped-gait-simulator", ["--ros-args", "-p", "pulse_duration:=0.0"], "parameter pulse_duration: must be in [0.0001, 0.1]"),
     ("biped-gait-launch", ["--config", "binary.yaml"], "binary.yaml: not UTF-8 text"),
     ("biped-gait-launch", ["--config", "nested.yaml"], "nested more than 32 levels"),
     ("biped-gait-launch", ["--config", "huge.yaml"], "more than the 1048576 allowed"),

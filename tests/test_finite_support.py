@@ -10,8 +10,8 @@ import pytest
 
 from biped_gait.core.dynamics.hybrid import HybridStep
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-from biped_gait.core.walking.finite_support import (TOLERANCE, _Periodic, passive_impact, plan_finite_support,
-                                                     pulse)
+from biped_gait.core.walking.finite_support import (SLACK, TOLERANCE, _Periodic, passive_impact,
+                                                     plan_finite_support, pulse)
 
 pytestmark = pytest.mark.core
 
@@ -57,3 +57,17 @@ def test_the_effort_tends_to_w(planned):
     assert gaps[1e-4] < gaps[2.5e-4]
     # the torques are the impulses spread over d / 2: large, and falling as 1 / d
     assert plans[1e-4].peak_torque > 1e5 and plans[1e-4].peak_torque > 2 * plans[2.5e-4].peak_torque
+
+
+def test_a_millisecond_double_support_is_planned_where_the_linear_programs_stall(planned):
+    """At d = 1 ms the sequential LPs stall; Gauss-Newton finds the periodic phase and the descent
+    along the periodic phases brings its effort to within 1 % of W (measured 32.94 after 4 steps,
+    32.90 after 8, against W = 32.78 N m s)."""
+    gait, hybrid, _ = planned
+    plan = plan_finite_support(hybrid, gait, 1e-3, descent_steps=4)
+    assert not plan.minimized and plan.residual < TOLERANCE
+    eq = _Periodic(hybrid, gait, 1e-3)
+    _, constraints, _ = eq.evaluate(np.concatenate([plan.v0, [plan.theta], plan.u_plus, plan.u_minus]))
+    assert np.max(constraints) <= SLACK
+    assert gait.W < plan.effort < 1.01 * gait.W
+    assert plan.friction_needed <= hybrid.bm.params.friction + 1e-6

@@ -79,8 +79,8 @@ def test_service_answer_equals_the_core(ros, planner, default_gait):
 def test_a_gait_of_the_hips_model_carries_its_joints(ros):
     """The 13-DOF set over the wire: every vector at its model's size, named; the trajectory lists
     the URDF's hip joints; a step width outside the model's range is refused, the node serving on."""
-    response = ros.call(ros.client, plan_request(arm_amplitude=math.radians(20.0), params="aoustin2013-hips",
-                                                 step_width=0.35))
+    response = ros.call(ros.client, plan_request(period=0.5, arm_amplitude=math.radians(20.0),
+                                                 params="aoustin2013-hips", step_width=0.35))
     assert response.success, response.message
     plan = response.plan
     assert len(plan.joint_names) == len(plan.q0) == len(plan.qd_a) == 13 and plan.step_width == 0.35

@@ -1,6 +1,7 @@
 """The simulator node over Fast DDS with a planner of its own: a 20-step walk that lands every
 step on the plan, the topics an independent subscriber sees, the recording (read back by two
-independent readers), SIGTERM and SIGKILL during a recording, and a fall reported as such."""
+independent readers), SIGTERM and SIGKILL during a recording, a fall reported as such, and the
+walk in MuJoCo (engine:=mujoco)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,8 @@ from sensor_msgs.msg import JointState
 from biped_gait.cli import main as cli_main
 from biped_gait.recording.recover import is_complete
 from biped_gait.core.model.params import load_params
+from biped_gait.core.walking.steering import DEFAULT_RATE
+from biped_gait.core.walking.walk import PlannedOrbit, Touchdown, Walk
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
@@ -212,3 +215,29 @@ def test_the_hips_model_walks_and_publishes_its_hip_joints(planner_node, tmp_pat
     assert {"right_hip_yaw_link", "right_hip_roll_link", "left_thigh"} <= frames
     rolls = np.array([m.position[names.index("left_hip_roll")] for _, m in topics["/joint_states"]])
     assert np.abs(rolls).max() > math.radians(3.0)  # the hips move
+
+
+def test_the_mujoco_engine_walks_and_records(planner_node, tmp_path, default_gait):
+    """engine:=mujoco through the nodes: 3 steps of the default gait with 5 ms pulses at 1 kHz,
+    recorded; the events carry what the pulses applied and land where the core's MuJoCo walk of
+    the same plan lands (the node only publishes it), /joint_states every millisecond."""
+    proc = simulator(tmp_path, "steps:=3", "real_time_factor:=0.0", "exit_when_done:=true", "engine:=mujoco",
+                     "pulse_duration:=0.005", "publish_rate:=1000.0")
+    assert proc.wait(timeout=300) == 0, (tmp_path / "biped-gait-simulator.log").read_text()
+    assert "engine mujoco (double support of 5 ms)" in (tmp_path / "biped-gait-simulator.log").read_text()
+    [bag] = list((tmp_path / "bags").iterdir())
+    topics = read_bag(bag)
+    events = [m for _, m in topics["/gait_events"]]
+    touchdowns = [e for e in events if e.kind == GaitEvent.TOUCHDOWN]
+    assert len(touchdowns) == 3 and events[-1].kind == GaitEvent.FINISHED
+    core = Walk(PlannedOrbit.of(default_gait), 1000.0, 3, engine="mujoco", pulse_duration=0.005,
+                momentum_rate=DEFAULT_RATE)
+    expected = [item for item in core if isinstance(item, Touchdown)]
+    for event, td in zip(touchdowns, expected):
+        assert abs(event.time_in_step - td.t_step) < 1e-6
+        assert np.allclose(event.i_minus, td.i_minus, atol=1e-6) and np.allclose(event.i_plus, td.i_plus, atol=1e-6)
+        assert event.effort_cost == pytest.approx(td.W, rel=1e-6)
+        assert event.effort_cost == pytest.approx(default_gait.W, rel=0.1)  # the pulses' effort, near the impulses'
+    assert touchdowns[0].state_error < 1e-7  # started on the plan: MuJoCo's first step is the plan's
+    assert abs(len(topics["/joint_states"]) - 1000 * expected[-1].t) <= 1
+    assert len(topics["/joint_states"]) == len(topics["/odom"]) == len(topics["/tf"])

@@ -44,10 +44,17 @@ def mode_from_msg(code: int) -> GaitMode:
 def gait_fields(msg, default_params: str, names: Sequence[str] = OPTION_NAMES) -> dict[str, object]:
     """The gait vocabulary's fields ``names`` of a request or goal ``msg`` (same names, same
     units) as ``GaitRequest`` fields: the mode parsed from its code, an empty ``params`` the
-    node's ``default_params``; no other value is replaced (NaN friction is the core's)."""
+    node's ``default_params``; a ``step_width`` of 0 is the core's NaN (the hips' spacing) and a
+    ``turn_radius`` of 0 or NaN the core's inf (straight), as the interface documents (a message
+    field cannot default to NaN or inf); no other value is replaced (NaN friction is the core's)."""
     fields = {name: getattr(msg, name) for name in names}
     fields["mode"] = mode_from_msg(msg.mode)
     fields["params"] = msg.params or default_params
+    if fields.get("step_width") == 0.0:
+        fields["step_width"] = math.nan
+    radius = fields.get("turn_radius")
+    if radius is not None and (radius == 0.0 or math.isnan(radius)):
+        fields["turn_radius"] = math.inf
     return fields
 
 

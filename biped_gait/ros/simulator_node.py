@@ -30,9 +30,11 @@ refuses both for the shipped parameter sets with the physical reason (docs/model
 slowest gait.
 
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
-recovers by its per-step re-aim, with momentum steering (``recovery``). Speed and turn:
-``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in rad/s), walked
-with transition steps within the envelope published on ``~/velocity_envelope``
+recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: ``engine``
+``hybrid`` (the planner's model) or ``mujoco`` (MuJoCo, the double support as torque pulses of
+``pulse_duration``; ``core/walking/mujoco_engine.py``): the same topics, events and recording.
+Speed and turn: ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in
+rad/s), walked with transition steps within the envelope published on ``~/velocity_envelope``
 (biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
 
 ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, every second): the walk's state, steps,
@@ -88,8 +90,8 @@ from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
-from ..core.walking.walk import (CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples, Touchdown, Walk,
-                                 prepare_walking)
+from ..core.walking.walk import (ENGINES, PULSE_DURATION, CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples,
+                                 Touchdown, Walk, prepare_walking)
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
@@ -138,6 +140,11 @@ PARAMETERS = (
     Param("steps", 20, "steps to walk (count); 0: until stopped", 0, 1000000),
     Param("real_time_factor", 1.0, "simulated seconds per wall second; 0: as fast as possible", 0.0, 1000.0),
     Param("publish_rate", 500.0, "samples per second of simulated time (Hz)", 1.0, 100000.0),
+    Param("engine", ENGINES[0], "what integrates the walk: 'hybrid' (the planner's model, impulsive double "
+          "supports) or 'mujoco' (MuJoCo on the exported stance tree, the double support as torque pulses of "
+          "pulse_duration; the walker's re-aim the feedback)", choices=ENGINES),
+    Param("pulse_duration", PULSE_DURATION, "with engine 'mujoco': the double support's duration d (s), its "
+          "impulses spread into torques over d / 2 before and after the touchdown", 1e-4, 0.1),
     Param("reaim", True, "re-solve each step from the actual state, the open-loop gait being unstable (true/false)"),
     Param("recovery", "momentum", "the re-aim's unknowns: 'duration' (the next step's duration) or 'momentum' "
           "(also the next touchdown's trunk pitch, steering the momentum about the feet line back to the plan's)",
@@ -419,6 +426,10 @@ class SimulatorNode(Node):
         self.speed.before_step(walker)
 
     # The walk -----------------------------------------------------------------------------
+    def _engine_text(self) -> str:
+        engine = self.value["engine"]
+        return f"{engine} (double support of {self.value['pulse_duration'] * 1e3:g} ms)" if engine == "mujoco" else engine
+
     def _run(self) -> None:
         try:
             if self._recording_failure:
@@ -474,7 +485,7 @@ class SimulatorNode(Node):
         self.get_logger().info(
             f"walking L = {plan.step_length:g} m, T = {plan.period:g} s, alpha = {math.degrees(plan.arm_amplitude):.2f} deg "
             f"({orbit[0].mode}){circle}, {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor "
-            f"{self.rtf:g}")
+            f"{self.rtf:g}, engine {self._engine_text()}")
         try:
             while True:
                 self.controls.take_reset()
@@ -501,7 +512,8 @@ class SimulatorNode(Node):
         held = time.monotonic()
         steer = self.value["reaim"] and self.value["recovery"] == "momentum"
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
-                    momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step)
+                    momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step,
+                    engine=self.value["engine"], pulse_duration=self.value["pulse_duration"])
         if walk.world is not None and self._messages is None:
             self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
         if walk.model is not None:

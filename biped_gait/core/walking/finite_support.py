@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import null_space
 from scipy.optimize import linprog
 
 from ..dynamics.hybrid import HybridStep, ImpactMap, impact_with
@@ -116,15 +117,17 @@ def passive_impact(impact: ImpactMap, qd: np.ndarray) -> Impact:
 
 
 def cone_rows(force: np.ndarray, friction: float) -> np.ndarray:
-    """The inscribed octagonal pyramid of the friction cone on ``force`` (N or N s): values <= 0
-    inside (section 4.4), and -Fz (the normal force positive); none of the cone's for mu = inf."""
-    fx, fy, fz = force
+    """The inscribed octagonal pyramid of the friction cone on ``force`` (N or N s; [Fx, Fy, Fz],
+    or rows of them): values <= 0 inside (section 4.4), and -Fz (the normal force positive); none
+    of the cone's for mu = inf. One row of values per force."""
+    force = np.asarray(force, dtype=float)
+    fx, fy, fz = force[..., 0], force[..., 1], force[..., 2]
     rows = [-fz]
     if math.isfinite(friction):
         apothem = friction * math.cos(math.pi / CONE_SIDES)
         rows += [math.cos(a) * fx + math.sin(a) * fy - apothem * fz
                  for a in 2 * math.pi * np.arange(CONE_SIDES) / CONE_SIDES]
-    return np.array(rows)
+    return np.stack(rows, axis=-1)
 
 
 def friction_ratio(forces: np.ndarray) -> float:
@@ -141,7 +144,9 @@ class FiniteSupport:
     theta (rad), the torques u^+ and u^- (N m, the actuated joints), the state at the decision
     point (the pre-impact pulse's start, T - d/2), the effort E (N m s) beside the impulsive gait's
     W, the friction the phase needs (the largest |F_xy| / F_z at the stance foot over both pulses,
-    and of the impact's reaction impulse), the largest torque (N m), the periodicity's residual."""
+    and of the impact's reaction impulse), the largest torque (N m), the periodicity's residual,
+    and whether E is the least (the sequential LPs converged; else the periodic phase Gauss-Newton
+    found nearest the shorter phase's, its effort not minimized)."""
 
     duration: float
     period: float
@@ -160,6 +165,7 @@ class FiniteSupport:
     peak_torque: float
     residual: float
     iterations: int
+    minimized: bool = True
 
     @property
     def ballistic(self) -> float:
@@ -174,6 +180,7 @@ class _Periodic:
         self.hybrid, self.gait, self.duration = hybrid, gait, duration
         bm = hybrid.bm
         self.n, self.na, self.actuated = bm.nq, len(bm.actuated), bm.actuated
+        self.free = self.n + 1  # the unknowns before the torques: v0, theta
         self.flow = hybrid.flow(DEFAULTS.fine_steps)  # the planner's fine grid
         self.configurations = boundary_configurations(bm)
         self.friction = bm.params.friction if math.isinf(gait.problem.options.friction) else gait.problem.options.friction
@@ -190,6 +197,15 @@ class _Periodic:
     def boundary(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
         g = self.gait
         return self.configurations(g.step_length, g.arm_amplitude, g.mode, theta, g.problem.step_width)
+
+    def scale(self, z: np.ndarray) -> np.ndarray:
+        """The unknowns' units for Gauss-Newton: rad/s, rad, and the largest torque (N m)."""
+        return np.concatenate([np.ones(self.n + 1), np.full(2 * self.na, max(1.0, float(np.max(np.abs(z[self.free:])))))])
+
+    def stacked(self, z: np.ndarray) -> np.ndarray:
+        """The residual and the constraints of ``evaluate``, one vector."""
+        residual, constraints, _ = self.evaluate(z)
+        return np.concatenate([residual, constraints])
 
     def evaluate(self, z: np.ndarray):
         """The residual (2 nq), the constraints (<= 0) and what the plan reports, at z."""
@@ -219,17 +235,96 @@ def _jacobian(f, z: np.ndarray, base: np.ndarray) -> np.ndarray:
     return np.array(columns).T
 
 
+SLACK = 1e-6  # N s, m/s: how far Gauss-Newton's result may violate a constraint (second-order effects)
+MARGIN = 1e-7  # N s, m/s: Gauss-Newton's steps meet the linearized constraints with this margin
+VIOLATION_COST = 1e3  # per N s (m/s) of a linearized constraint violated, against the step's scaled l1 norm
+GAUSS_NEWTON_STEPS = 30
+HALVINGS = 12  # of a Gauss-Newton step at most, until the merit falls
+
+
+def gauss_newton(evaluate, jacobian, z: np.ndarray, scale, tolerance: float,
+                 fresh: bool = True) -> tuple[np.ndarray, int]:
+    """z meeting the equations of ``evaluate`` (z -> residual, constraints <= 0, anything) to
+    ``tolerance`` and its constraints to ``SLACK``, from ``z``, and the steps taken. Each step is
+    the least (in the units ``scale(z)`` gives, one per unknown) that meets the linearized equations, moved
+    in their null space by the least (l1) that meets the linearized constraints (with ``MARGIN``;
+    their violations paid at ``VIOLATION_COST``: a linear program), halved until the merit
+    sum |residual| + sum max(constraint - SLACK, 0) falls. ``jacobian(z, residual, constraints,
+    fresh)``: d(residual, constraints) / dz, ``fresh`` asking for all of it anew (else it may reuse
+    what does not change much); asked fresh again when a step cannot lower the merit.
+    ``FiniteSupportFailed`` if no step can, or after ``GAUSS_NEWTON_STEPS``."""
+    residual, constraints, _ = evaluate(z)
+
+    def merit(r: np.ndarray, c: np.ndarray) -> float:
+        return float(np.abs(r).sum() + np.maximum(c - SLACK, 0.0).sum()) if np.all(np.isfinite(r)) else math.inf
+
+    jac, steps = None, 0
+    while True:
+        if np.max(np.abs(residual)) < tolerance and np.max(constraints) <= SLACK:
+            return z, steps
+        if steps == GAUSS_NEWTON_STEPS:
+            break
+        if jac is None:
+            with np.errstate(all="ignore"):
+                jac = jacobian(z, residual, constraints, fresh)
+            if not np.all(np.isfinite(jac)):
+                raise FiniteSupportFailed(f"Gauss-Newton's Jacobian is not finite at residual "
+                                          f"{np.max(np.abs(residual)):.2e}")
+        units = scale(z)
+        scaled = jac * units
+        j_eq, j_in = scaled[:len(residual)], scaled[len(residual):]
+        y = np.linalg.lstsq(j_eq, -residual, rcond=None)[0]
+        free = null_space(j_eq)
+        y = y + free @ _least_move(j_in @ free, -constraints - j_in @ y - MARGIN)
+        step, now = units * y, merit(residual, constraints)
+        for _ in range(HALVINGS):
+            with np.errstate(all="ignore"):
+                trial = evaluate(z + step)
+            if merit(trial[0], trial[1]) < now:
+                break
+            step = step / 2
+        else:
+            if fresh:
+                break
+            jac, fresh = None, True
+            continue
+        z, (residual, constraints, _) = z + step, trial
+        steps, fresh, jac = steps + 1, False, None
+    raise FiniteSupportFailed(f"Gauss-Newton stalls at residual {np.max(np.abs(residual)):.2e}, "
+                              f"constraint {np.max(constraints):.2e}")
+
+
+def _least_move(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The w of least l1 norm with a w <= b, its violations paid at ``VIOLATION_COST`` (HiGHS;
+    w = 0 when it meets them)."""
+    m, k = a.shape
+    if np.all(b >= 0.0):
+        return np.zeros(k)
+    cost = np.concatenate([np.ones(2 * k), np.full(m, VIOLATION_COST)])
+    lp = linprog(cost, A_ub=np.hstack([a, -a, -np.eye(m)]), b_ub=b, bounds=(0, None), method="highs")
+    if lp.status != 0:
+        raise FiniteSupportFailed(f"the linearized constraints have no least move ({lp.message})")
+    return lp.x[:k] - lp.x[k:2 * k]
+
+
 FIRST_DURATION = 2.5e-4  # s: the continuation in d starts here, from the impulsive gait
 LINE_SEARCH = 8  # shrinkings of the trust region per linear program at most
 PENALTY = 1e4  # N m s per unit of residual (rad, rad/s) or of a violated constraint (N, N s, m/s)
 RADIUS = 0.5  # the trust region's largest radius: rad/s, rad, and fractions of the largest torque
+DESCENT_STEPS = 12  # of the effort's descent at most, at the duration asked
+PASSING_DESCENT = 4  # at the continuation's durations on the way (keeping to the low-effort branch)
+DESCENT_GAIN = 1e-4  # relative: the descent stops when a step lowers E by less
 
 
-def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float) -> FiniteSupport:
+def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float,
+                        descent_steps: int = DESCENT_STEPS) -> FiniteSupport:
     """The periodic gait of ``gait`` (an impulsive plan, admissible) with a double support of
     ``duration`` s (module docstring), by continuation in d from ``FIRST_DURATION`` (doubling; the
-    torques scaled to keep their integrals); ``FiniteSupportFailed`` if a linear program fails or
-    the iterations do not reach ``TOLERANCE``."""
+    torques scaled to keep their integrals): the least effort by sequential linear programs while
+    they converge; from the first duration where they stall, the periodic phase by Gauss-Newton
+    (``_restore``) and its effort lowered along the periodic phases (``_descend``, at most
+    ``descent_steps`` at ``duration``, ``PASSING_DESCENT`` on the way; ``FiniteSupport.minimized``
+    false). ``FiniteSupportFailed`` if Gauss-Newton cannot meet the equations."""
     if not duration > 0 or not duration < gait.period:
         raise ValueError(f"the double support's duration must be in (0, T = {gait.period:g}) s, got {duration:g} s")
     bm = hybrid.bm
@@ -244,30 +339,89 @@ def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float) -> Fini
     stages = [first]
     while stages[-1] < duration:
         stages.append(min(duration, 2 * stages[-1]))
+    minimized = True  # while the sequential LPs converge; after that, Gauss-Newton and the descent
     for k, stage in enumerate(stages):
         if k:
             z[n + 1:] *= stages[k - 1] / stage
-        z, iterations = _sequential_lp(_Periodic(hybrid, gait, stage), z)
-    return _finish(_Periodic(hybrid, gait, duration), z, iterations)
+        eq = _Periodic(hybrid, gait, stage)
+        if minimized:
+            try:
+                z, iterations = _sequential_lp(eq, z)
+                continue
+            except FiniteSupportFailed:
+                minimized = False
+        z, iterations = _descend(eq, _restore(eq, z), descent_steps if stage == duration else PASSING_DESCENT)
+    return _finish(_Periodic(hybrid, gait, duration), z, iterations, minimized)
+
+
+
+
+def _restore(eq: _Periodic, z: np.ndarray) -> np.ndarray:
+    """The periodic phase nearest ``z`` (``gauss_newton``, its Jacobian by differences)."""
+    def jacobian(x: np.ndarray, residual: np.ndarray, constraints: np.ndarray, fresh: bool) -> np.ndarray:
+        return _jacobian(eq.stacked, x, np.concatenate([residual, constraints]))
+
+    return gauss_newton(eq.evaluate, jacobian, z, eq.scale, TOLERANCE)[0]
+
+
+def _descend(eq: _Periodic, z: np.ndarray, most: int) -> tuple[np.ndarray, int]:
+    """From the periodic phase ``z``, lower its effort E along the periodic phases: each step goes
+    down E's gradient projected on the null space of the equations' Jacobian (scaled), by a
+    length that grows by half after a success and halves after a failure, and ``_restore`` brings
+    it back onto the equations (and the constraints); kept if E fell. Until a step gains less than
+    ``DESCENT_GAIN``, or ``most`` steps: towards a local minimum of E over the periodic phases. The
+    descent's steps taken, beside z."""
+    half, free = eq.duration / 2, eq.free
+
+    def effort(x: np.ndarray) -> float:
+        return float(half * np.abs(x[free:]).sum())
+
+    length, steps = 0.05, 0
+    for steps in range(1, most + 1):
+        residual, constraints, _ = eq.evaluate(z)
+        scale = eq.scale(z)
+        jac = _jacobian(eq.stacked, z, np.concatenate([residual, constraints]))[:len(residual)] * scale
+        gradient = np.zeros(len(z))
+        gradient[free:] = half * np.sign(z[free:]) * scale[free:]
+        basis = null_space(jac)
+        direction = -basis @ (basis.T @ gradient)
+        direction /= max(np.max(np.abs(direction)), 1e-300)
+        now = effort(z)
+        while length > 1e-4:
+            try:
+                trial = _restore(eq, z + length * scale * direction)
+            except FiniteSupportFailed:
+                trial = None
+            if trial is not None and effort(trial) < now:
+                z, length = trial, 1.5 * length
+                break
+            length /= 2
+        else:
+            break
+        if now - effort(z) < DESCENT_GAIN * now:
+            break
+    return z, steps
 
 
 def _merit(eq: _Periodic, z: np.ndarray, residual: np.ndarray, constraints: np.ndarray) -> float:
     """The l1 merit of z: its effort plus ``PENALTY`` times the residual's and the violations' sums."""
-    torques = z[eq.n + 1:]
+    torques = z[eq.free:]
     return float(eq.duration / 2 * np.abs(torques).sum()
                  + PENALTY * (np.abs(residual).sum() + np.maximum(constraints, 0.0).sum()))
 
 
-def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
-    """z solving ``eq`` (periodic to ``TOLERANCE``, constraints met) from ``z``: linear programs in
-    the step of z with elastic constraints (violations paid at ``PENALTY``), within a trust region
-    that shrinks until the step lowers the l1 merit."""
-    n, na, half, duration = eq.n, eq.na, eq.duration / 2, eq.duration
-    torques = slice(n + 1, n + 1 + 2 * na)
+def _sequential_lp(eq, z: np.ndarray, tolerance: float = TOLERANCE) -> tuple[np.ndarray, int]:
+    """z solving ``eq`` (its equations to ``tolerance``, constraints met) from ``z``: linear
+    programs in the step of z with elastic constraints (violations paid at ``PENALTY``), within a
+    trust region that shrinks until the step lowers the l1 merit. ``eq``: a ``_Periodic``, or
+    anything with its ``free`` (the unknowns before the 2 ``na`` torques, which end z),
+    ``duration`` and ``evaluate`` (residual, constraints <= 0, anything)."""
+    na, half, duration = eq.na, eq.duration / 2, eq.duration
+    torques = slice(eq.free, eq.free + 2 * na)
     residual, constraints, _ = eq.evaluate(z)
     radius = RADIUS
     for iteration in range(1, SLP_ITERATIONS + 1):
-        if np.max(np.abs(residual)) < TOLERANCE and np.max(constraints) <= 1e-9:
+        if np.max(np.abs(residual)) < tolerance and np.max(constraints) <= 1e-9:
             return z, iteration
 
         def stacked(x: np.ndarray) -> np.ndarray:
@@ -275,8 +429,9 @@ def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
             return np.concatenate([r, c])
 
         jac = _jacobian(stacked, z, np.concatenate([residual, constraints]))
-        j_eq, j_in = jac[:2 * n], jac[2 * n:]
-        size, m, e = len(z), len(constraints), 2 * n
+        e = len(residual)
+        j_eq, j_in = jac[:e], jac[e:]
+        size, m = len(z), len(constraints)
         # variables: dz, t >= |u + du| (2 na), s >= 0 (the inequalities' slack), s+, s- >= 0 (the equations')
         width = size + 2 * na + m + 2 * e
         cost = np.concatenate([np.zeros(size), np.full(2 * na, half), np.full(m + 2 * e, PENALTY)])
@@ -291,7 +446,7 @@ def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
             rhs.append(-sign * z[torques])
         a_eq = np.zeros((e, width))
         a_eq[:, :size], a_eq[:, width - 2 * e: width - e], a_eq[:, width - e:] = j_eq, -np.eye(e), np.eye(e)
-        scale = np.concatenate([np.ones(n + 1), np.full(2 * na, max(1.0, float(np.max(np.abs(z[torques])))))])
+        scale = np.concatenate([np.ones(eq.free), np.full(2 * na, max(1.0, float(np.max(np.abs(z[torques])))))])
         merit = _merit(eq, z, residual, constraints)
         for _ in range(LINE_SEARCH):
             bounds = [(-radius * w, radius * w) for w in scale] + [(0, None)] * (width - size)
@@ -312,7 +467,7 @@ def _sequential_lp(eq: _Periodic, z: np.ndarray) -> tuple[np.ndarray, int]:
                               f"{SLP_ITERATIONS} linear programs")
 
 
-def _finish(eq: _Periodic, z: np.ndarray, iterations: int) -> FiniteSupport:
+def _finish(eq: _Periodic, z: np.ndarray, iterations: int, minimized: bool) -> FiniteSupport:
     residual, constraints, (q0, q_t, qd_t, q_dec, qd_dec, forces, landing) = eq.evaluate(z)
     v0, theta, u_plus, u_minus = eq.split(z)
     gait, duration, half = eq.gait, eq.duration, eq.duration / 2
@@ -322,5 +477,5 @@ def _finish(eq: _Periodic, z: np.ndarray, iterations: int) -> FiniteSupport:
         effort=float(half * (np.abs(u_plus).sum() + np.abs(u_minus).sum())), impulsive_effort=gait.W,
         friction_needed=max(friction_ratio(forces), friction_ratio(landing.reaction[None, :])),
         peak_torque=float(np.max(np.abs(np.concatenate([u_plus, u_minus])))),
-        residual=float(np.max(np.abs(residual))), iterations=iterations,
+        residual=float(np.max(np.abs(residual))), iterations=iterations, minimized=minimized,
     )

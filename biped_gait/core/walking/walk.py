@@ -52,6 +52,10 @@ from .steering import MomentumSteering, SteeringFailed, reference
 from .world import WorldPictures, WorldState, WorldView
 
 CLOSURE_ROUNDS = 10  # re-aims per double support at most, with legs leaning (the planner's rounds)
+ENGINES = ("hybrid", "mujoco")
+"""How a walk's steps are integrated: ``hybrid``, the planner's own model (this module); ``mujoco``,
+MuJoCo on the floating export with the double support as torque pulses (``mujoco_engine``)."""
+PULSE_DURATION = 5e-3  # s: the double support's duration d with the MuJoCo engine
 
 
 @dataclass(frozen=True)
@@ -228,12 +232,14 @@ class Walker:
     the dynamics of ``hybrid`` one step per ``walk_step``."""
 
     def __init__(self, hybrid: HybridStep, orbit: PlannedOrbit | Cycle, rate: float, reaim: bool = True,
-                 settings: Settings = DEFAULTS, momentum_rate: float | None = None) -> None:
+                 settings: Settings = DEFAULTS, momentum_rate: float | None = None, engine=None) -> None:
         """``rate``: samples per second of simulated time; ``reaim``: re-solve each step's BVP
         from the actual state (else aim at the plan's velocity); ``momentum_rate``: steer the
         momentum about the feet line back to the plan's, its error contracting by this factor per
         step (``steering``, docs/model.md section 8.7; None: the duration-only re-aim of section
-        8.5); ``settings.walk_steps``: RK8 steps per period T."""
+        8.5); ``settings.walk_steps``: RK8 steps per period T; ``engine``: what walks each step in
+        place of the hybrid step (its ``walk_step(walker)``, e.g. ``mujoco_engine.MujocoEngine``:
+        the walker's double support is then its feedback); None: the hybrid step."""
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if momentum_rate is not None and not reaim:
@@ -257,6 +263,7 @@ class Walker:
         self._pushes: list[Push] = []  # to act in the current step, by time
         self._applied: list[AppliedPush] = []
         self._next_cycle: Cycle | None = None
+        self.engine = engine
 
     def _prepared(self, cycle: Cycle, transition: np.ndarray | None = None) -> list[tuple]:
         """Each step of ``cycle`` with what its re-aim needs, computed once: the momentum steering
@@ -351,7 +358,9 @@ class Walker:
 
     def walk_step(self) -> StepOutcome:
         """Integrate the current step until touchdown (or 2 T), then evaluate its samples in one
-        call; if none falls, apply the double support."""
+        call; if none falls, apply the double support (or the ``engine``'s step)."""
+        if self.engine is not None:
+            return self.engine.walk_step(self)
         s = self.state
         h = self.period / self.grid
         t_step, q, qd = 0.0, s.q, s.qd
@@ -555,12 +564,16 @@ class Walk:
     samples between two events at once, as arrays. ``model`` and ``world`` (None if it could not
     start) describe the robot. ``momentum_rate``: the walker's momentum steering (``Walker``);
     ``before_step``: called with the walker before each step (pushes to apply, a gait to aim at:
-    ``Walker.push``, ``Walker.retarget``).
+    ``Walker.push``, ``Walker.retarget``); ``engine``: one of ``ENGINES``, with ``pulse_duration``
+    (s) the MuJoCo engine's double support (``mujoco_engine``).
     """
 
     def __init__(self, orbit: PlannedOrbit | Cycle, rate: float, steps: int = 0, reaim: bool = True,
                  settings: Settings = DEFAULTS, momentum_rate: float | None = None,
-                 before_step: Callable[[Walker], object] | None = None) -> None:
+                 before_step: Callable[[Walker], object] | None = None, engine: str = "hybrid",
+                 pulse_duration: float = PULSE_DURATION) -> None:
+        if engine not in ENGINES:
+            raise ValueError(f"unknown engine {engine!r}: use one of {', '.join(ENGINES)}")
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if steps < 0:
@@ -584,7 +597,11 @@ class Walk:
             self.problem = str(exc)
             return
         self.world = WorldView(self.model)
-        self.walker = Walker(HybridStep(self.model), cycle, rate, reaim, settings, momentum_rate)
+        hybrid, stepper = HybridStep(self.model), None
+        if engine == "mujoco":
+            from .mujoco_engine import MujocoEngine  # MuJoCo is loaded only for its walks
+            stepper = MujocoEngine(hybrid, rate, pulse_duration)
+        self.walker = Walker(hybrid, cycle, rate, reaim, settings, momentum_rate, stepper)
 
     def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
         for item in self.batches():

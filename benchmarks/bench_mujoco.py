@@ -1,0 +1,123 @@
+"""Benchmark: the simulator's real-time factor at 1 kHz with recording, ``engine:=mujoco`` (pulses
+of 5 ms) beside ``engine:=hybrid`` in the same run: 10 steps of the default gait, as fast as
+possible, planner and simulator as real node processes, the two engines' runs alternated (so
+that the machine's load falls on both alike), each figure the median of ``--repeat`` runs (the
+range beside it). Beside them the walks alone (the core's ``Walk``, no ROS, no world view), and
+where the MuJoCo walk's time goes: MuJoCo's own steps, and the planner's model planning each
+double support (the prediction, the walker's re-aim and LP, the pulses' correction). Run:
+
+    .venv/bin/python benchmarks/bench_mujoco.py [--steps N] [--repeat N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import re
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ.setdefault("ROS_DOMAIN_ID", "93")
+
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
+from biped_gait.core.walking.mujoco_engine import MujocoEngine  # noqa: E402
+from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
+from biped_gait.core.walking.walk import Finished, PlannedOrbit, Walk  # noqa: E402
+from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
+
+RATE = 1000.0
+PULSE = 0.005
+REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
+
+
+def node_factor(where: Path, steps: int, engine: str) -> float:
+    """The simulator node's real-time factor (from its log) with ``engine``, recording, against a
+    planner of its own."""
+    where.mkdir(exist_ok=True)
+    planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / "planner.log", cwd=where)
+    try:
+        sim = start_entry("biped-gait-simulator", [
+            "-p", f"steps:={steps}", "-p", "real_time_factor:=0.0", "-p", f"publish_rate:={RATE}",
+            "-p", "exit_when_done:=true", "-p", "record:=true", "-p", f"record_dir:={where}/bags",
+            "-p", f"engine:={engine}", "-p", f"pulse_duration:={PULSE}"],
+            log=where / "simulator.log", cwd=where)
+        sim.wait(timeout=900)
+    finally:
+        stop_process(planner)
+    log = (where / "simulator.log").read_text()
+    match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
+    assert match, log
+    return float(match.group(2))
+
+
+class _Timed:
+    """Wall time (s) spent in one method of an object, summed over its calls."""
+
+    def __init__(self, owner: object, name: str) -> None:
+        self.total, method = 0.0, getattr(owner, name)
+
+        def timed(*args, **kwargs):
+            start = time.perf_counter()
+            try:
+                return method(*args, **kwargs)
+            finally:
+                self.total += time.perf_counter() - start
+
+        setattr(owner, name, timed)
+
+
+def core_walk(planner: GaitPlanner, steps: int, engine: str) -> tuple[float, float, float]:
+    """The real-time factor of the core's walk (samples with their world view, no ROS) with
+    ``engine``; and, for MuJoCo, the seconds spent in MuJoCo's steps and in planning the double
+    supports (zero for the hybrid walk)."""
+    walk = Walk(PlannedOrbit.of(planner.plan(REQUEST)), RATE, steps, engine=engine, pulse_duration=PULSE,
+                momentum_rate=DEFAULT_RATE)
+    engine_object = walk.walker.engine
+    stepping = planning = None
+    if isinstance(engine_object, MujocoEngine):
+        stepping, planning = _Timed(engine_object, "_advance"), _Timed(engine_object, "_plan")
+    start = time.perf_counter()
+    items = list(walk.batches())
+    wall = time.perf_counter() - start
+    assert isinstance(items[-1], Finished), items[-1]
+    return (items[-1].t / wall, stepping.total if stepping else 0.0, planning.total if planning else 0.0)
+
+
+def summary(values: list[float]) -> str:
+    return f"{statistics.median(values):6.2f} [{min(values):.2f}, {max(values):.2f}]"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    planner = GaitPlanner()
+    nodes: dict[str, list[float]] = {"hybrid": [], "mujoco": []}
+    cores: dict[str, list[tuple[float, float, float]]] = {"hybrid": [], "mujoco": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in range(args.repeat):
+            for engine in ("hybrid", "mujoco"):
+                nodes[engine].append(node_factor(Path(tmp) / f"{engine}_{k}", args.steps, engine))
+                cores[engine].append(core_walk(planner, args.steps, engine))
+    simulated = args.steps * REQUEST.period
+    print(f"{args.steps} steps of the default gait at {RATE:g} Hz, MuJoCo's pulses {PULSE * 1e3:g} ms; "
+          f"real-time factor, median of {args.repeat} [range]")
+    for engine in ("hybrid", "mujoco"):
+        print(f"  node, engine:={engine}, every topic published and recorded: {summary(nodes[engine])}")
+    for engine in ("hybrid", "mujoco"):
+        print(f"  walk alone (core Walk, world view, no ROS), {engine}:        {summary([c[0] for c in cores[engine]])}")
+    stepping = statistics.median(c[1] for c in cores["mujoco"])
+    planning = statistics.median(c[2] for c in cores["mujoco"])
+    print(f"  MuJoCo walk of about {simulated:.1f} s simulated: MuJoCo's steps {stepping:.3f} s, planning the double "
+          f"supports {planning:.3f} s ({1e3 * planning / args.steps:.1f} ms each)")
+    ratio = statistics.median(nodes["mujoco"]) / statistics.median(nodes["hybrid"])
+    print(f"  node mujoco / node hybrid: {ratio:.2f}")
+
+
+if __name__ == "__main__":
+    main()

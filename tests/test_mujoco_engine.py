@@ -1,0 +1,98 @@
+"""The walk in MuJoCo (``engine="mujoco"``, core/walking/mujoco_engine.py): the single support
+integrated by MuJoCo on the exported stance tree, the double support as torque pulses, the
+walker's re-aim as the feedback. Against the hybrid walker, and 20 steps of the default gait."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from biped_gait.core.walking.push import AppliedPush, Push
+from biped_gait.core.walking.steering import DEFAULT_RATE
+from biped_gait.core.walking.walk import Finished, PlannedOrbit, StepSamples, Touchdown, Walk, Walker
+
+pytestmark = pytest.mark.core
+
+CONFIGURATION_DRIFT = 4.5  # rad/s: the pre-impact pulse moves the touchdown configuration by at most this times d
+
+
+@pytest.mark.parametrize("pulse", [1e-3, 5e-3])
+def test_the_first_step_is_the_hybrid_walkers_but_for_the_pulse(planner, default_gait, pulse):
+    """Started on the plan, MuJoCo's single support (RK4, 1 ms) is the hybrid walker's: the
+    touchdown predicted from MuJoCo's state 10 ms before the pulse is the hybrid's to 1e-7 (rad,
+    rad/s); MuJoCo's swing foot lands when the hybrid's does (1e-8 s), its configuration moved by
+    the pre-impact pulse by at most CONFIGURATION_DRIFT d (measured: 3.9 rad/s d, from 0.5 to
+    10 ms)."""
+    orbit = PlannedOrbit.of(default_gait)
+    hybrid = Walker(planner.hybrid, orbit, rate=100.0, momentum_rate=DEFAULT_RATE).walk_step().touchdown
+    walk = Walk(orbit, 100.0, 1, engine="mujoco", pulse_duration=pulse, momentum_rate=DEFAULT_RATE)
+    outcome = walk.walker.walk_step()
+    mujoco = walk.walker.engine.touchdowns[0]
+    assert outcome.touchdown is not None and hybrid.state_error < 1e-9
+    q_t, qd_b = default_gait.step.q_target, default_gait.step.qd_b
+    print(f"\nd = {pulse * 1e3:g} ms: predicted touchdown off the hybrid's by "
+          f"{np.max(np.abs(mujoco.q_predicted - q_t)):.1e} rad, {np.max(np.abs(mujoco.qd_predicted - qd_b)):.1e} rad/s; "
+          f"MuJoCo's touchdown {mujoco.t - hybrid.t:.1e} s later, its configuration "
+          f"{np.max(np.abs(mujoco.q - q_t)):.2e} rad off")
+    assert np.max(np.abs(mujoco.q_predicted - q_t)) < 1e-7 and np.max(np.abs(mujoco.qd_predicted - qd_b)) < 1e-7
+    assert abs(mujoco.t - hybrid.t) < 1e-8
+    assert 0.1 * pulse < np.max(np.abs(mujoco.q - q_t)) < CONFIGURATION_DRIFT * pulse
+    assert outcome.touchdown.t == mujoco.t
+    assert mujoco.residual < 1e-7 and mujoco.friction_used <= planner.model.params.friction
+
+
+def test_mujoco_walks_the_default_gait_twenty_steps_with_5_ms_pulses(planner, default_gait):
+    """The default gait (L = T = 0.45, alpha = 23.5 deg) in MuJoCo with pulses of 5 ms: 20 steps,
+    every pulsed phase within the friction cone (MuJoCo's reaction at every sample, mu = 0.5), the
+    vertical reaction positive, the effort within 10 % of the impulses' W (measured 35.4 against
+    33.2 N m s), the feet L apart to 5 mm (measured 2.1 mm short: the pre-impact pulse moves the
+    touchdown configuration)."""
+    walk = Walk(PlannedOrbit.of(default_gait), 100.0, 20, engine="mujoco", pulse_duration=5e-3,
+                momentum_rate=DEFAULT_RATE)
+    items = list(walk.batches())
+    touchdowns = [item for item in items if isinstance(item, Touchdown)]
+    assert isinstance(items[-1], Finished) and items[-1].steps == 20 and len(touchdowns) == 20
+    mu = planner.model.params.friction
+    for record in walk.walker.engine.touchdowns:
+        assert record.residual < 1e-7
+        assert record.friction_planned <= mu + 1e-6 and record.friction_used <= mu
+        assert record.effort == pytest.approx(record.impulsive_effort, rel=0.1)
+    grf = np.vstack([np.array([s.grf for s in item.samples]) for item in items if isinstance(item, StepSamples)])
+    assert np.min(grf[:, 2]) > 0
+    durations = [td.t_step for td in touchdowns]
+    print(f"\n20 steps in MuJoCo, d = 5 ms: durations {min(durations):.4f}-{max(durations):.4f} s, effort "
+          f"{walk.walker.engine.touchdowns[-1].effort:.2f} N m s (W {touchdowns[-1].W:.2f}), friction used "
+          f"{max(r.friction_used for r in walk.walker.engine.touchdowns):.3f}")
+    foot = walk.walker.state.stance_foot
+    print(f"stance foot after 20 steps: {foot} m (steps of {foot[0] / 20:.4f} m: the pre-impact pulse moves the landing)")
+    assert abs(foot[0] / 20 - 0.45) < 0.005 and foot[1:] == pytest.approx([-0.2, 0.0], abs=1e-9)
+    assert all(math.isfinite(d) and abs(d - default_gait.period) < 0.01 for d in durations)
+
+
+def test_an_unknown_engine_or_a_pulse_that_does_not_last_is_refused(default_gait):
+    orbit = PlannedOrbit.of(default_gait)
+    with pytest.raises(ValueError, match="unknown engine 'ode'"):
+        Walk(orbit, 100.0, 1, engine="ode")
+    with pytest.raises(ValueError, match="pulse duration must be positive"):
+        Walk(orbit, 100.0, 1, engine="mujoco", pulse_duration=0.0)
+
+
+def test_a_push_is_walked_off_in_mujoco(default_gait):
+    """A push of 0.25 N s forward on the trunk at 0.3 T of step 1 acts on MuJoCo's trunk; the walker
+    re-plans when the touchdown is due (the planner's model after the push) and walks it off as the
+    hybrid walker does (measured touchdown errors 0.41, 4.4, 0.99, 0.42, 0.32 rad/s against the
+    hybrid's 0.42, 5.2, 0.92, 0.20, 0.05)."""
+    def push_in_step_1(walker: Walker) -> None:
+        if walker.state.step == 1:
+            walker.push(Push(np.array([0.25, 0.0, 0.0]), 0.3 * default_gait.period))
+
+    walk = Walk(PlannedOrbit.of(default_gait), 100.0, 6, engine="mujoco", momentum_rate=DEFAULT_RATE,
+                before_step=push_in_step_1)
+    items = list(walk)
+    pushes = [item for item in items if isinstance(item, AppliedPush)]
+    errors = [item.state_error for item in items if isinstance(item, Touchdown)]
+    assert isinstance(items[-1], Finished) and len(errors) == 6
+    assert len(pushes) == 1 and pushes[0].step == 1 and np.max(np.abs(pushes[0].delta_qd)) > 0.01
+    assert errors[2] > 1.0 and errors[-1] < 0.5  # knocked off, and back to the 5 ms walk's (0.27)
