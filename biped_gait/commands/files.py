@@ -4,9 +4,9 @@ file from a killed recorder's)."""
 from __future__ import annotations
 
 import argparse
-import sys
 
 from ..arguments import check_output_file
+from .output import write_model
 from ..core.model.params import load_params
 from ..core.model.urdf import make_urdf
 from ..recording.recover import check_mcap, is_complete, recover as recover_file
@@ -15,13 +15,7 @@ from ..recording.recover import check_mcap, is_complete, recover as recover_file
 def urdf(args: argparse.Namespace) -> int:
     if args.out:
         check_output_file(args.out, "--out")
-    text = make_urdf(load_params(args.params))
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text)
-    else:
-        sys.stdout.write(text)
-    return 0
+    return write_model(make_urdf(load_params(args.params)), args.out)
 
 
 def recover(args: argparse.Namespace) -> int:

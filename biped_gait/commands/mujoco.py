@@ -8,7 +8,7 @@ import math
 import sys
 
 from ..arguments import check_output_file, check_output_folder, request_fields
-from .output import check_json, write_json
+from .output import check_json, write_json, write_model
 from ..core.model.params import load_params
 
 CHECK_TOLERANCE = 1e-8  # rad: the ballistic step's agreement that check-mujoco asks for
@@ -19,13 +19,7 @@ def mjcf(args: argparse.Namespace) -> int:
 
     if args.out:
         check_output_file(args.out, "--out")
-    text = make_mjcf(load_params(args.params), args.kind)
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text)
-    else:
-        sys.stdout.write(text)
-    return 0
+    return write_model(make_mjcf(load_params(args.params), args.kind), args.out)
 
 
 def check(args: argparse.Namespace) -> int:

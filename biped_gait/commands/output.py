@@ -37,3 +37,15 @@ def write_json(target: str | None, document: object) -> Path | None:
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text)
     return path
+
+
+def write_model(text: str, out: Path | None) -> int:
+    """A model file's ``text`` (URDF, MJCF) to ``out`` (its folder made; checked with
+    ``check_output_file`` before the model was built) or, without ``--out``, standard output;
+    exit status 0."""
+    if out:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text)
+    else:
+        sys.stdout.write(text)
+    return 0
