@@ -134,7 +134,7 @@ def test_figure_commands_write_png(tmp_path, name, options):
 def test_results_page_is_generated_with_its_figures(tmp_path):
     page = tmp_path / "docs" / "results.md"
     proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "22.5", "--workers", "2",
-               timeout=280)
+               "--pulse-durations", "5", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
     for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
@@ -142,7 +142,8 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
                     "## Where the project and the paper differ, and why",
                     "## Where walking is possible (maps beyond the paper)", "## Stability of the gaits (beyond the paper)",
                     "## The physics a reviewer would check (beyond the paper)", "### Beside human walking",
-                    "## The walk: stability, pushes, commanded speed", "## Walking on circles (beyond the paper)"):
+                    "## The walk: stability, pushes, commanded speed", "## Walking on circles (beyond the paper)",
+                    "## A double support that lasts, walked in MuJoCo (beyond the paper)"):
         assert heading in text
     links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
     assert links[:3] == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
@@ -152,6 +153,7 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
+    assert "| 5 | 20 | " in text and "The largest d tried that walks 20 steps: 5 ms." in text  # MuJoCo, 5 ms pulses
 
 
 @pytest.mark.parametrize("options, alpha, effort", [

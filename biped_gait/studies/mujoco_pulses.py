@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import sys
+from concurrent.futures import Executor
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,8 +99,29 @@ def pulse_row(orbit: PlannedOrbit, duration: float) -> PulseRow:
                     error, contraction)
 
 
-def table(durations: tuple[float, ...] = DURATIONS,
-          request: GaitRequest = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")) -> str:
+DEFAULT_REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
+
+
+def pulse_row_of(duration: float, request: GaitRequest = DEFAULT_REQUEST) -> PulseRow:
+    """``pulse_row`` of the gait of ``request`` (planned here: a worker's task)."""
+    return pulse_row(PlannedOrbit.of(GaitPlanner().plan(request)), duration)
+
+
+def pulse_rows(executor: Executor, durations: tuple[float, ...] = DURATIONS,
+               request: GaitRequest = DEFAULT_REQUEST) -> list[PulseRow]:
+    """``pulse_row_of`` for each of ``durations`` (s), one task each on ``executor``."""
+    return [task.result() for task in [executor.submit(pulse_row_of, d, request) for d in durations]]
+
+
+def pulse_lines(rows: list[PulseRow]) -> list[str]:
+    """The results page's table of ``rows`` and its reading (the largest d walked)."""
+    walked = [row.duration for row in rows if row.steps >= STEPS]
+    largest = (f"The largest d tried that walks {STEPS} steps: {max(walked) * 1e3:g} ms." if walked
+               else f"None of the durations tried walks {STEPS} steps.")
+    return [HEADER, *(row.markdown() for row in rows), "", largest]
+
+
+def table(durations: tuple[float, ...] = DURATIONS, request: GaitRequest = DEFAULT_REQUEST) -> str:
     """The Markdown table of ``pulse_row`` for each of ``durations`` (s), the default gait."""
     orbit = PlannedOrbit.of(GaitPlanner().plan(request))
     return "\n".join([HEADER, *(pulse_row(orbit, d).markdown() for d in durations)])

@@ -30,6 +30,7 @@ from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
 from .hips_page import HIPS_PARAMS, hips_lines, hips_study
+from .mujoco_pulses import DURATIONS as PULSE_DURATIONS, PulseRow, pulse_lines, pulse_rows
 from .turning_page import FIGURE as TURNING_FIGURE, Turning, turning_figure, turning_lines, turning_study
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
 from .walking_page import ALPHA_STEP as WALK_ALPHA_STEP, Walking, compute_walking, walking_figures, walking_section
@@ -372,6 +373,7 @@ class Extensions:
     walking: Walking | None = None
     hips: Study | None = None
     turning: Turning | None = None
+    pulses: Sequence[PulseRow] = ()
 
 
 STABILITY_FIGURE = "stability.png"
@@ -440,6 +442,16 @@ def render(
                   "rotation of 2 L / R (docs/model.md sections 3.1 and 4.9), planned like the straight gait and walked "
                   "by the simulator (`-p turn_radius:=R`, or `/cmd_vel` angular.z).", ""]
         lines += turning_lines(extensions.turning)
+    if extensions.pulses:
+        lines += ["", "## A double support that lasts, walked in MuJoCo (beyond the paper)", "",
+                  "The paper's caveat: impulsive torques cannot be realized. In MuJoCo (`engine:=mujoco`, docs/model.md "
+                  "section 11) each double support is d seconds of torque pulses, half before and half after the "
+                  "touchdown, corrected with the planner's model so that the next step lands where the re-aim aims; "
+                  "the default gait, 20 steps, momentum steering, the floor's mu = 0.5. E is the pulses' effort "
+                  "(d / 2) sum |u| of the last double support beside the impulses' W there; the contraction per step "
+                  "is that of a shove of 1e-4 rad/s on every joint at step 10 (below 1: the closed loop is stable):",
+                  ""]
+        lines += pulse_lines(list(extensions.pulses))
     lines += _maps_section(extensions.maps, figures)
     if extensions.stability:
         lines += ["", "## Stability of the gaits (beyond the paper)", "",
@@ -459,10 +471,12 @@ def render(
 
 
 def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP,
-                       walk_alpha_step: float = WALK_ALPHA_STEP) -> list[Path]:
+                       walk_alpha_step: float = WALK_ALPHA_STEP,
+                       pulse_durations: Sequence[float] = PULSE_DURATIONS) -> list[Path]:
     """Compute the study for both parameter sets (``PARAMETER_SETS``) on ``executor``, write
     the figures beside ``out`` and the page to ``out``; returns the paths written.
-    ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes."""
+    ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes;
+    ``pulse_durations`` (s): the double supports walked in MuJoCo (none: no such section)."""
     out = Path(out)
     studies = run_study(executor, [load_params(n) for n in PARAMETER_SETS], TABLE_CASES, coarse_step=coarse_step)
     references = {n: Reference.compute(n) for n in PARAMETER_SETS}
@@ -478,7 +492,7 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     all_maps = [compute_maps(study.params, executor, coarse_step=coarse_step) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
-    extensions = _extensions(default, executor, all_maps, coarse_step, walk_alpha_step)
+    extensions = _extensions(default, executor, all_maps, coarse_step, walk_alpha_step, pulse_durations)
     figures["Open-loop spectral radius over (L, T)"] = (
         stability_figure(Atlas.load(atlas_path(default.params, GaitMode.NORMAL), default.params)), STABILITY_FIGURE)
     figures["Effort against the joint-rate bound"] = (
@@ -494,7 +508,7 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
 
 
 def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMaps], coarse_step: float,
-                walk_alpha_step: float) -> Extensions:
+                walk_alpha_step: float, pulse_durations: Sequence[float]) -> Extensions:
     """The sections beyond the paper, for the default parameter set, computed on ``executor``
     (optima bracketed every ``coarse_step`` rad, the walk's alphas every ``walk_alpha_step``)."""
     params = default.params
@@ -506,4 +520,4 @@ def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMa
                             human_comparison(params, coarse_step=coarse_step))
     walking = compute_walking(executor, default, walk_alpha_step)
     return Extensions(all_maps, [p.result() for p in points], checks, walking, hips_study(executor, coarse_step),
-                      turning_study(executor))
+                      turning_study(executor), pulse_rows(executor, tuple(pulse_durations)))
