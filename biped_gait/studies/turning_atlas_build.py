@@ -2,8 +2,10 @@
 
 One task per arm amplitude of the grid (on any ``concurrent.futures.Executor``): at each (L, T)
 node the straight gait (the planner's, from its atlas), then the strides at each curvature of the
-grid in turn, each warm-started from the last (``GaitPlanner.plan_stride`` with a guess); a
-stride that does not converge ends its line (the larger curvatures stay NO_CONVERGENCE).
+grid in turn, each warm-started from the last (``GaitPlanner.plan_stride`` with a guess and its
+curvature: a solve that leaves the branch is done again along a finer continuation, so that a
+node does not land on the twin branch of the swing knee bent backwards); a stride that does not
+converge ends its line (the larger curvatures stay NO_CONVERGENCE).
 L in m, T in s, alpha in rad, kappa in 1/m.
 """
 
@@ -49,15 +51,15 @@ def build_turning_slab(params: BipedParams, mode: GaitMode, grid: TurningGrid, k
         if not straight.converged or straight.double_support is None:
             continue
         _store(nodes, (i, j, 0), stride_record((straight, straight), straight.admissible))
-        guess = (straight.qd_a, straight.theta, straight.qd_a, straight.theta)
+        guess, reached = (straight.qd_a, straight.theta, straight.qd_a, straight.theta), 0.0
         for m, curvature in enumerate(grid.curvatures[1:], start=1):
             stride = planner.plan_stride(GaitRequest(length, period, alpha, mode, turn_radius=1.0 / float(curvature)),
-                                         guess, stability=False)
+                                         guess, stability=False, guess_curvature=reached)
             if not _solved(stride):
                 break
             _store(nodes, (i, j, m), stride_record(stride.steps, stride.admissible))
             a, b = stride.steps
-            guess = (a.qd_a, a.theta, b.qd_a, b.theta)
+            guess, reached = (a.qd_a, a.theta, b.qd_a, b.theta), float(curvature)
     return k, nodes
 
 

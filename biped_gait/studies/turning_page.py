@@ -58,13 +58,15 @@ def stride_figures(stride: Stride) -> StrideFigures:
     steps = stride.steps
     length = stride.problem.step_length
     swings = []
-    for gait in steps:
+    for gait in steps:  # a stride that did not converge (a radius below the smallest) has no samples: NaN
         names = gait.names.joints
-        q = gait.figures.samples.q
-        swings.append(max(float(np.ptp(q[:, names.index(side)])) for side in ("stance_side_shoulder", "swing_side_shoulder")))
+        q = gait.figures.samples.q if gait.figures is not None else None
+        swings.append(math.nan if q is None else
+                      max(float(np.ptp(q[:, names.index(side)])) for side in ("stance_side_shoulder", "swing_side_shoulder")))
     return StrideFigures(stride.radius, stride.problem.arm_amplitude, stride.W, stride.W / (2 * length),
                          stride.admissible, stride.reasons, tuple(g.W for g in steps), tuple(swings),
-                         tuple(g.double_support.h_t_minus[1] for g in steps), stride.hint)
+                         tuple(g.double_support.h_t_minus[1] if g.double_support is not None else math.nan
+                               for g in steps), stride.hint)
 
 
 def solve_point(radius: float, alpha: float, mode: GaitMode) -> StrideFigures:
@@ -113,8 +115,13 @@ def turning_study(executor: Executor) -> Turning:
     return Turning(atlases, [f.result() for f in radii], {m: [f.result() for f in fs] for m, fs in optima.items()})
 
 
+def _number(value: float, spec: str) -> str:
+    """``value`` formatted by ``spec``, or "-" where there is none (NaN: a stride not solved)."""
+    return "-" if math.isnan(value) else format(value, spec)
+
+
 def _radius(radius: float) -> str:
-    return "inf" if math.isinf(radius) else f"{radius:g}"
+    return "inf" if math.isinf(radius) else f"{radius:.3g}"
 
 
 def turning_lines(turning: Turning) -> list[str]:
@@ -128,9 +135,10 @@ def turning_lines(turning: Turning) -> list[str]:
              "|---:|---|---:|---:|---|---|---|"]
     for f in turning.radii:
         verdict = "yes" if f.admissible else "no: " + "; ".join(f.reasons)
-        lines.append(f"| {_radius(f.radius)} | {verdict} | {f.W:.2f} | {f.per_metre:.2f} | {f.step_W[0]:.2f} / "
-                     f"{f.step_W[1]:.2f} | {math.degrees(f.arm_swing[0]):.1f} / {math.degrees(f.arm_swing[1]):.1f} | "
-                     f"{f.yaw_momentum[0]:.3f} / {f.yaw_momentum[1]:.3f} |")
+        swing = [_number(math.degrees(a), ".1f") for a in f.arm_swing]
+        lines.append(f"| {_radius(f.radius)} | {verdict} | {_number(f.W, '.2f')} | {_number(f.per_metre, '.2f')} | "
+                     f"{_number(f.step_W[0], '.2f')} / {_number(f.step_W[1], '.2f')} | {swing[0]} / {swing[1]} | "
+                     f"{_number(f.yaw_momentum[0], '.3f')} / {_number(f.yaw_momentum[1], '.3f')} |")
     smallest = next((f.hint for f in turning.radii if f.hint), "")
     lines += ["", f"Refused below the smallest radius: {smallest or 'every radius of the table is admissible'}.", ""]
     lines += ["Smallest admissible radius on the turning atlas's grid (every curvature up to it admissible), "
@@ -177,12 +185,17 @@ def _reading(turning: Turning) -> list[str]:
                    f"{tight.per_metre:.2f} N s at R = {tight.radius:g} m "
                    f"({100 * (tight.per_metre / straight.per_metre - 1):.0f} % more); W is even in 1/R (a right turn is "
                    "the left one's mirror image) with its minimum at the straight gait.")
+        swings = [math.degrees(a) for a in tight.arm_swing]
+        same = abs(swings[0] - swings[1]) < 0.05
+        arms = (f"the arms swing {swings[0]:.1f} deg peak to peak in both steps (one amplitude per stride: the double "
+                "supports' configurations put the shoulders at +-alpha, so the inner and the outer step cannot swing "
+                "them differently; two amplitudes per stride would be a further unknown)" if same else
+                f"the arms swing {swings[0]:.1f} and {swings[1]:.1f} deg peak to peak")
         out.append(f"- **The inner and the outer step differ**: at R = {tight.radius:g} m the outer step (A) costs "
-                   f"{tight.step_W[0]:.2f} and the inner (B) {tight.step_W[1]:.2f} N m s; the arms swing "
-                   f"{math.degrees(tight.arm_swing[0]):.1f} and {math.degrees(tight.arm_swing[1]):.1f} deg, and the yaw "
-                   f"momentum before the touchdowns is {tight.yaw_momentum[0]:.3f} and {tight.yaw_momentum[1]:.3f} "
-                   f"kg m^2/s against {straight.yaw_momentum[0]:.3f} straight: the turn itself is a yaw rotation the "
-                   "stride has to carry, and the arms' swing is no longer symmetric between the steps.")
+                   f"{tight.step_W[0]:.2f} and the inner (B) {tight.step_W[1]:.2f} N m s, and the yaw momentum before "
+                   f"the touchdowns is {tight.yaw_momentum[0]:.3f} and {tight.yaw_momentum[1]:.3f} kg m^2/s against "
+                   f"{straight.yaw_momentum[0]:.3f} straight: the stride carries the turn's yaw rotation, the outer "
+                   f"step more of it; {arms}.")
     shift = [math.degrees(f.alpha - normal[0].alpha) for f in normal[1:]]
     out.append(f"- **The optimal arm swing while turning** moves by {', '.join(f'{s:+.2f}' for s in shift)} deg from "
                f"the straight gait's {math.degrees(normal[0].alpha):.2f} deg at R = "

@@ -240,14 +240,19 @@ class GaitPlanner:
             gait = self._find(problem)
         return replace(gait, solve_time_s=time.perf_counter() - start)
 
-    def plan_stride(self, request: GaitRequest, guess: StrideGuess | None = None, stability: bool = True) -> Stride:
+    def plan_stride(self, request: GaitRequest, guess: StrideGuess | None = None, stability: bool = True,
+                    guess_curvature: float | None = None) -> Stride:
         """Solve one gait on a circle (``request.turn_radius`` finite): a stride of two steps
         (docs/model.md section 4.9). ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) of a nearby
-        stride warm-starts it; without one the stride is reached from the straight gait at the
-        same (L, T, alpha, mode) by continuation in the curvature 1 / R. ``ValueError`` for an
-        invalid request; a stride that is not admissible (or not reached) is returned so, with
-        the smallest radius of an admissible stride at that (L, T, alpha) in its ``hint``;
-        ``stability``: with the stride's open-loop multipliers (they cost about what the solve does)."""
+        stride warm-starts it (with ``guess_curvature``, the curvature in 1/m it was solved at: a
+        solve that leaves the guess's branch is done again along a continuation from it); without
+        one the turning atlas's, checked like the guess; a stride the atlas leads to that is not
+        admissible is compared with the one reached from the straight gait at the same (L, T,
+        alpha, mode) by continuation in the curvature 1 / R (an atlas node may sit on the other
+        branch). ``ValueError`` for an invalid request; a stride that is not admissible (or not
+        reached) is returned so, with the smallest radius of an admissible stride at that
+        (L, T, alpha) in its ``hint``; ``stability``: with the stride's open-loop multipliers (they
+        cost about what the solve does)."""
         problem = validate_request(request, self.params)
         if not math.isfinite(problem.turn_radius):
             raise ValueError("a straight gait is one step: plan it with plan")
@@ -260,15 +265,22 @@ class GaitPlanner:
             if not (stride.converged and _stride_near(stride, atlas_guess)):
                 stride = None
         path: list[tuple[float, StrideGuess]] = []
-        if stride is None:
-            found = "guess"
-            if guess is None:
-                straight = self.plan(replace(request, turn_radius=math.inf))
-                if not straight.converged:
+        if stride is None and guess is not None:
+            stride = self._stride(problem, guess, "guess", stability)
+            if guess_curvature is not None and not (stride.converged and _stride_near(stride, guess)):
+                path = self._curvature_path(problem, start=(guess_curvature, guess))
+                stride = self._stride(problem, path[-1][1], "continuation", stability)
+                path = []  # not from the straight gait: no use to the radius hint
+        elif stride is None or not stride.admissible:
+            straight = self.plan(replace(request, turn_radius=math.inf))
+            if not straight.converged:
+                if stride is None:
                     raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
-                found, path = "continuation", self._curvature_path(problem, straight)
-                guess = path[-1][1]
-            stride = self._stride(problem, guess, found, stability)
+            else:
+                path = self._curvature_path(problem, straight)
+                reached = self._stride(problem, path[-1][1], "continuation", stability)
+                if stride is None or reached.admissible:
+                    stride = reached
         if not stride.admissible:
             smallest = atlas.smallest_radius(point[:3]) if atlas is not None and atlas.grid.contains(
                 (*point[:3], abs(point[3]))) else None
@@ -355,22 +367,28 @@ class GaitPlanner:
                 bad = middle
         return f"smallest turn radius of an admissible stride at {where}: {abs(1.0 / good):.3g} m"
 
-    def _curvature_path(self, problem: GaitProblem, straight: Gait) -> list[tuple[float, StrideGuess]]:
-        """From the straight gait to the stride of radius R: continuation in the curvature 1 / R,
-        each step on the coarse grid warm-started from the last, halved where it fails or jumps
-        (``continuation.BRANCH_JUMP``); the curvatures (1/m) reached and their strides, the
-        last nearest the request's (the straight gait's first, at a vanishing curvature, if no
-        step succeeds)."""
+    def _curvature_path(self, problem: GaitProblem, straight: Gait | None = None,
+                        start: tuple[float, StrideGuess] | None = None) -> list[tuple[float, StrideGuess]]:
+        """To the stride of radius R from the ``straight`` gait, or from ``start`` = (curvature
+        1/m, its stride): continuation in the curvature 1 / R, each step on the coarse grid
+        warm-started from the last, halved where it fails or jumps (``continuation.BRANCH_JUMP``);
+        the curvatures (1/m) reached and their strides, the last nearest the request's (the
+        start's first: the straight gait's at a vanishing curvature, if no step succeeds)."""
         target = 1.0 / problem.turn_radius
-        guess = (straight.qd_a, straight.theta, straight.qd_a, straight.theta)
-        path = [(MIN_CURVATURE_STEP * target / abs(target), guess)]
+        if start is None:
+            origin, guess = 0.0, (straight.qd_a, straight.theta, straight.qd_a, straight.theta)
+            path = [(MIN_CURVATURE_STEP * target / abs(target), guess)]
+        else:
+            origin, guess = start
+            path = [start]
+        span = target - origin
         coarse = replace(self.settings, tolerance=max(self.settings.tolerance, self.settings.coarse_tolerance),
                          max_iterations=STEP_ITERATIONS)
         flow = self.coarse_flow or self.flow
-        curvature, step = 0.0, min(1.0, CURVATURE_STEP / abs(target))
-        while curvature != target and step * abs(target) >= MIN_CURVATURE_STEP:
-            trial = curvature + step * target
-            if (trial - target) * target > 0:
+        curvature, step = origin, min(1.0, CURVATURE_STEP / abs(span))
+        while curvature != target and step * abs(span) >= MIN_CURVATURE_STEP:
+            trial = curvature + step * span
+            if (trial - target) * span > 0:
                 trial = target
             solution = solve_stride(self.hybrid, flow, problem.step_length, problem.period, problem.arm_amplitude,
                                     problem.mode, 1.0 / trial, guess, coarse)
@@ -378,7 +396,7 @@ class GaitPlanner:
             if solution.converged and max(np.max(np.abs(a.qd_a - guess[0])), np.max(np.abs(b.qd_a - guess[2]))) <= BRANCH_JUMP:
                 curvature, guess = trial, (a.qd_a, a.theta, b.qd_a, b.theta)
                 path.append((curvature, guess))
-                step = min(2.0 * step, CURVATURE_STEP / abs(target))
+                step = min(2.0 * step, CURVATURE_STEP / abs(span))
             else:
                 step *= 0.5
         return path
