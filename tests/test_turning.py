@@ -136,3 +136,22 @@ def test_pushes_while_turning_are_recovered_or_falls_with_their_reason(hips, str
     assert hard.touchdown is None and "the momentum about the feet line, which no impulse changes, is" in hard.fall
     harder = walk([3.0, 0.0, 0.0])[-1]
     assert harder.touchdown is None and "the double support at t =" in harder.fall and "has no solution" in harder.fall
+
+
+def test_a_turning_atlas_line_stays_on_the_human_like_branch():
+    """L = 0.45 m, T = 0.5 s, alpha = 20 deg, normal: each curvature warm-started from the last
+    (as the atlas is built) stays on the branch of the straight gait, admissible to 1/R = 0.9 1/m,
+    the swing knees within 2 deg of straight and W of the stride growing with the curvature (warm
+    started directly, step B jumped to the twin branch, knee -42 deg, from R = 14 m)."""
+    from biped_gait.core.gait.atlas import NodeStatus
+    from biped_gait.core.gait.configurations import GaitMode
+    from biped_gait.core.gait.turning_atlas import TurningGrid
+    from biped_gait.core.model.params import load_params
+    from biped_gait.studies.turning_atlas_build import build_turning_slab
+
+    grid = TurningGrid.default()
+    line = TurningGrid(np.array([0.45]), np.array([0.5]), np.array([math.radians(20.0)]), grid.curvatures[:10])
+    _, nodes = build_turning_slab(load_params("aoustin2013-hips"), GaitMode.NORMAL, line, 0)
+    assert np.all(nodes["status"][0, 0] == NodeStatus.ADMISSIBLE), nodes["status"][0, 0]
+    assert np.degrees(nodes["q9_min"][0, 0]).min() > -2.0
+    assert np.all(np.diff(nodes["W"][0, 0]) > 0)
