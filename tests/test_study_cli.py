@@ -67,13 +67,21 @@ def test_bad_input_is_one_line_and_status_2(tmp_path, args, message):
     assert proc.stdout == "" and not out.exists()
 
 
+def _sigint_as_in_a_terminal() -> None:
+    """In the child before exec: SIGINT at its default, as for a terminal's foreground job (a
+    test session started in the background, ``cmd &`` or ``nohup``, ignores SIGINT, and Python
+    keeps an inherited SIG_IGN: Ctrl-C would never reach the sweep)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
 def test_interrupted_sweep_keeps_what_it_computed(tmp_path):
     """Ctrl-C reaches the whole process group (the command and its workers), as in a terminal."""
     out = tmp_path / "out"
     args = ["sweep", "--step-length-range", "0.30", "0.56", "0.02", "--alpha-deg-range", "0", "45", "2.5",
             "--mode", "normal", "anti-normal", "--out", str(out), "--workers", "2"]
     proc = subprocess.Popen([ENTRY, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_sigint_as_in_a_terminal)
     try:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline and proc.poll() is None:
