@@ -25,9 +25,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.gait.planner import GaitPlanner, GaitRequest
+from ..core.gait.planner import GaitRequest
+from ..core.model.params import load_params
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.walking.walk import Fell, Finished, PlannedOrbit, Walk, Walker
+from .executors import planner_for
 
 STEPS = 20
 SHOVE_AT = 10  # step
@@ -103,8 +105,8 @@ DEFAULT_REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
 
 
 def pulse_row_of(duration: float, request: GaitRequest = DEFAULT_REQUEST) -> PulseRow:
-    """``pulse_row`` of the gait of ``request`` (planned here: a worker's task)."""
-    return pulse_row(PlannedOrbit.of(GaitPlanner().plan(request)), duration)
+    """``pulse_row`` of the gait of ``request``, planned by this worker's planner (``planner_for``)."""
+    return pulse_row(PlannedOrbit.of(planner_for(load_params(request.params)).plan(request)), duration)
 
 
 def pulse_rows(executor: Executor, durations: tuple[float, ...] = DURATIONS,
@@ -122,9 +124,9 @@ def pulse_lines(rows: list[PulseRow]) -> list[str]:
 
 
 def table(durations: tuple[float, ...] = DURATIONS, request: GaitRequest = DEFAULT_REQUEST) -> str:
-    """The Markdown table of ``pulse_row`` for each of ``durations`` (s), the default gait."""
-    orbit = PlannedOrbit.of(GaitPlanner().plan(request))
-    return "\n".join([HEADER, *(pulse_row(orbit, d).markdown() for d in durations)])
+    """The results page's table and reading (``pulse_lines``) for each of ``durations`` (s), in
+    this process."""
+    return "\n".join(pulse_lines([pulse_row_of(d, request) for d in durations]))
 
 
 if __name__ == "__main__":

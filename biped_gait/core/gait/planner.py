@@ -268,15 +268,13 @@ class GaitPlanner:
         if stride is None and guess is not None:
             stride = self._stride(problem, guess, "guess", stability)
             if guess_curvature is not None and not (stride.converged and _stride_near(stride, guess)):
-                path = self._curvature_path(problem, start=(guess_curvature, guess))
-                stride = self._stride(problem, path[-1][1], "continuation", stability)
-                path = []  # not from the straight gait: no use to the radius hint
+                resumed = self._curvature_path(problem, start=(guess_curvature, guess))[-1][1]
+                stride = self._stride(problem, resumed, "continuation", stability)
         elif stride is None or not stride.admissible:
             straight = self.plan(replace(request, turn_radius=math.inf))
-            if not straight.converged:
-                if stride is None:
-                    raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
-            else:
+            if not straight.converged and stride is None:
+                raise ValueError(f"no straight gait to turn from at this (L, T, alpha): {straight.message}")
+            if straight.converged:
                 path = self._curvature_path(problem, straight)
                 reached = self._stride(problem, path[-1][1], "continuation", stability)
                 if stride is None or reached.admissible:
