@@ -5,7 +5,9 @@ Each of ``--processes`` fresh Python processes makes a ``GaitPlanner`` (default 
 atlases) and plans ``--plans`` gaits from the atlas, each a new request of one family (L = T =
 0.45, alpha 15 to 30 deg, normal mode), then the first request again; the first plan's time is
 set beside the same request's second plan and the median of the others. The processes alternate with cold solves of the yardstick, so that a change of load falls
-on both. Run:
+on both. The multipliers' share: the time a plan spends in ``open_loop`` (waiting for the
+variational flow begun beside the double support, then the reset's derivative, the saltation and
+the eigenvalues), and the variational flow alone (the work the background thread does). Run:
 
     .venv/bin/python benchmarks/bench_plan.py [--processes N] [--plans N]
 """
@@ -25,19 +27,32 @@ from yardsticks import ColdSolve, median_s
 
 def child(plans: int) -> None:
     """In a fresh process: the planner's making, its plans (the first request last again) (s), as JSON."""
-    from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+    import biped_gait.core.gait.planner as planning
+    from biped_gait.core.gait.stability import variational_flow
 
     start = time.perf_counter()
-    planner = GaitPlanner()
+    planner = planning.GaitPlanner()
     made = time.perf_counter()
+    in_open_loop = []
+    open_loop = planning.open_loop
+
+    def timed_open_loop(*args, **kwargs):
+        begin = time.perf_counter()
+        out = open_loop(*args, **kwargs)
+        in_open_loop.append(time.perf_counter() - begin)
+        return out
+
+    planning.open_loop = timed_open_loop
     times, found = [], set()
     alphas = [math.radians(15.0 + 15.0 * k / max(1, plans - 1)) for k in range(plans)]
     for alpha in alphas + alphas[:1]:
         begin = time.perf_counter()
-        gait = planner.plan(GaitRequest(0.45, 0.45, alpha, "normal"))
+        gait = planner.plan(planning.GaitRequest(0.45, 0.45, alpha, "normal"))
         times.append(time.perf_counter() - begin)
         found.add(gait.found)
-    print(json.dumps({"make": made - start, "plans": times, "found": sorted(found)}))
+    flow = median_s(lambda: variational_flow(planner.flow, 0.45, gait.step.q0, gait.step.qd_a), 5)
+    print(json.dumps({"make": made - start, "plans": times, "found": sorted(found), "open_loop": in_open_loop[1:-1],
+                      "variational_flow": flow}))
 
 
 def main() -> None:
@@ -66,6 +81,10 @@ def main() -> None:
     print(f"  the other plans: {1e3 * warm:7.2f} ms   first / other = {first / warm:.2f}")
     print(f"  cold solve / first plan = {yardstick / first:.1f}   cold solve / next plan = {yardstick / warm:.1f}")
     print(f"  (before the first plan: making the planner with its atlases {1e3 * statistics.median(r['make'] for r in runs):.1f} ms)")
+    in_open_loop = statistics.median(t for run in runs for t in run["open_loop"])
+    flow = statistics.median(run["variational_flow"] for run in runs)
+    print(f"  multipliers: {1e3 * in_open_loop:5.2f} ms of a plan's {1e3 * warm:5.2f} ms ({in_open_loop / warm:.0%}) in "
+          f"open_loop; beside the double support, their variational flow took {1e3 * flow:5.2f} ms of a second core")
 
 
 if __name__ == "__main__":

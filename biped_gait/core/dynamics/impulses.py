@@ -33,7 +33,8 @@ joint's minus its distal joints').
 from __future__ import annotations
 
 import threading
-from functools import lru_cache
+import weakref
+from functools import cached_property, lru_cache
 import math
 from dataclasses import dataclass, replace
 
@@ -62,38 +63,42 @@ class ImpactLayout:
 
     @classmethod
     def of(cls, bm: BipedModel) -> "ImpactLayout":
-        """The layout of ``bm``'s double support."""
-        contacts = 4 if bm.spin else 3
-        return _layout(bm.double_support.nv, tuple(int(k) for k in bm.ds_actuated), contacts, contacts,
-                       absolute_reading(bm))
+        """The layout of ``bm``'s double support (made once per model)."""
+        layout = _LAYOUTS.get(bm)
+        if layout is None:
+            contacts = 4 if bm.spin else 3
+            layout = _LAYOUTS[bm] = _layout(bm.double_support.nv, tuple(int(k) for k in bm.ds_actuated), contacts,
+                                            contacts, absolute_reading(bm))
+        return layout
 
     @property
     def na(self) -> int:
         return len(self.joint_rows)
 
-    @property
+    @cached_property
     def joints(self) -> np.ndarray | slice:
         """Rows of X of the actuated joints (a slice when they are contiguous)."""
         rows = self.joint_rows
         contiguous = rows == tuple(range(rows[0], rows[0] + len(rows)))
         return slice(rows[0], rows[-1] + 1) if contiguous else np.array(rows)
 
-    def _spans(self) -> tuple[slice, ...]:
+    @cached_property
+    def _span_list(self) -> tuple[slice, ...]:
         sizes = (self.nx, self.na, self.contact_old, self.nx, self.contact_new, self.na, self.contact_new)
         ends = np.cumsum(sizes)
         return tuple(slice(int(e - n), int(e)) for e, n in zip(ends, sizes))
 
-    xd_minus = property(lambda self: self._spans()[0], doc="Xd^-: after I^-, before the impact")
-    i_minus = property(lambda self: self._spans()[1], doc="I^-: joint impulses before the impact")
-    ir1_minus = property(lambda self: self._spans()[2], doc="I_R1^-: the old stance tip's reaction")
-    xd_plus = property(lambda self: self._spans()[3], doc="Xd^+: just after the passive impact")
-    ir2 = property(lambda self: self._spans()[4], doc="I_R2: the passive impact at the new stance tip")
-    i_plus = property(lambda self: self._spans()[5], doc="I^+: joint impulses after the impact")
-    ir2_plus = property(lambda self: self._spans()[6], doc="I_R2^+: the new stance tip's reaction to I^+")
+    xd_minus = property(lambda self: self._span_list[0], doc="Xd^-: after I^-, before the impact")
+    i_minus = property(lambda self: self._span_list[1], doc="I^-: joint impulses before the impact")
+    ir1_minus = property(lambda self: self._span_list[2], doc="I_R1^-: the old stance tip's reaction")
+    xd_plus = property(lambda self: self._span_list[3], doc="Xd^+: just after the passive impact")
+    ir2 = property(lambda self: self._span_list[4], doc="I_R2: the passive impact at the new stance tip")
+    i_plus = property(lambda self: self._span_list[5], doc="I^+: joint impulses after the impact")
+    ir2_plus = property(lambda self: self._span_list[6], doc="I_R2^+: the new stance tip's reaction to I^+")
 
     @property
     def unknowns(self) -> int:
-        return self._spans()[6].stop
+        return self._span_list[6].stop
 
     @property
     def equations(self) -> int:
@@ -114,6 +119,9 @@ class ImpactLayout:
     @property
     def absolute(self) -> np.ndarray:
         return np.array(self.absolute_rows, dtype=float)
+
+
+_LAYOUTS: "weakref.WeakKeyDictionary[BipedModel, ImpactLayout]" = weakref.WeakKeyDictionary()
 
 
 @lru_cache(maxsize=16)

@@ -16,6 +16,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable
+from concurrent.futures import Future
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -25,7 +26,7 @@ from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
 from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
-from ..dynamics.flow import hermite_samples
+from ..dynamics.flow import BallisticFlow, FlowResult, hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem, Stride
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, friction_ratios, solve_impulses
@@ -34,6 +35,7 @@ from ..model.params import BipedParams, load_params
 from .figures import StepFigures, energy_drift, step_figures
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
+from .monodromy import BackgroundVariationalFlow
 from .stability import PoincareMap, multipliers_of, open_loop
 from .stride import solve_stride
 from .turning_atlas import TurningAtlas, turning_atlas_path
@@ -175,6 +177,8 @@ class GaitPlanner:
     its atlases (loaded when it is made, so that its first plan costs what the next ones do).
 
     Not thread-safe (Pinocchio data are reused): give each thread or process its own planner.
+    It keeps one thread of its own, which integrates each gait's variational flow for the
+    multipliers while the double support is solved (``monodromy``).
     """
 
     def __init__(self, params: BipedParams | str | None = None, settings: Settings = DEFAULTS, atlas: bool = True,
@@ -197,6 +201,7 @@ class GaitPlanner:
         self.hybrid = HybridStep(self.model)
         self.flow = self.hybrid.flow(settings.fine_steps)
         self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
+        self._background = BackgroundVariationalFlow(BallisticFlow(self.model.single, settings.fine_steps))
         for mode in GaitMode:
             self._atlases[mode] = self._load_atlas(mode)
 
@@ -446,6 +451,7 @@ class GaitPlanner:
         """The gait of ``problem`` solved from ``guess`` (None: the straight-line start)."""
         step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                          problem.mode, problem.closure, guess, self.settings, self.coarse_flow, problem.step_width)
+        flow = self._variational_flow(problem, step)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
             ds = gait.double_support
@@ -456,14 +462,20 @@ class GaitPlanner:
             step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
                              problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
                              problem.step_width, closure_target=-ds.foot_line_moment)
+            flow = self._variational_flow(problem, step)
             gait = self.step_gait(problem, step, found)
         else:
             gait = self._unsettled(problem, step, found)
         if gait.double_support is not None and gait.double_support.impulses.success:
             impulses = gait.double_support.impulses
             gait = replace(gait, stability=open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
-                                                     impulses.i_minus, impulses.i_plus))
+                                                     impulses.i_minus, impulses.i_plus, flow.result()))
         return gait
+
+    def _variational_flow(self, problem: GaitProblem, step: BvpSolution) -> Future[FlowResult] | None:
+        """The step's full-state variational flow (for its multipliers), begun on the background
+        thread while the double support is solved; None if the step did not converge."""
+        return self._background.start(problem.period, step.q0, step.qd_a) if step.converged else None
 
     def _unsettled(self, problem: GaitProblem, step: BvpSolution, found: str,
                    next_qd_a: np.ndarray | None = None) -> Gait:

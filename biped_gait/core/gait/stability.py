@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.flow import BallisticFlow
+from ..dynamics.flow import BallisticFlow, FlowResult
 from ..dynamics.hybrid import HybridStep
 
 FD_STEP = 1e-6  # rad: central differences of the reset's configuration dependence
@@ -84,12 +84,13 @@ class PoincareMap:
         _, q, qd = self.touchdown(x[:n], x[n:])
         return self.reset(q, qd)
 
-    def jacobian(self, x: np.ndarray) -> np.ndarray:
-        """dP/dx at the fixed point x (2 nq x 2 nq): variational flow, saltation, reset derivative."""
+    def jacobian(self, x: np.ndarray, run: FlowResult | None = None) -> np.ndarray:
+        """dP/dx at the fixed point x (2 nq x 2 nq): variational flow, saltation, reset derivative.
+        ``run``: the flow's ``variational_flow`` from x over T, if already integrated."""
         bm = self.hybrid.bm
         n = bm.nq
-        q0, qd0 = x[:n], x[n:]
-        run = self.flow.propagate(q0, qd0, self.period, np.eye(2 * n))
+        if run is None:
+            run = variational_flow(self.flow, self.period, x[:n], x[n:])
         q, qd, phi = run.q, run.qd, run.sens
         qdd = self.flow.acceleration(q, qd)
         grad = bm.tip_jacobians(q)[1][2, bm.ds_of_single]  # d w / d q (m/rad)
@@ -110,12 +111,19 @@ class PoincareMap:
         return out
 
 
+def variational_flow(flow: BallisticFlow, period: float, q0: np.ndarray, qd0: np.ndarray) -> FlowResult:
+    """The flow from (q0, qd0) over ``period`` (s) with the sensitivity of the whole end state to
+    the whole start state (2 nq x 2 nq): the Poincare map's flow part. On the compiled flow it
+    runs without Python's lock, so a planner integrates it beside the double support."""
+    return flow.propagate(q0, qd0, period, np.eye(2 * len(q0)))
+
+
 def open_loop(hybrid: HybridStep, flow: BallisticFlow, period: float, q0: np.ndarray, qd0: np.ndarray,
-              i_minus: np.ndarray, i_plus: np.ndarray) -> Multipliers:
+              i_minus: np.ndarray, i_plus: np.ndarray, run: FlowResult | None = None) -> Multipliers:
     """The open-loop multipliers of the gait starting at (q0, qd0) with period T (s) and joint
-    impulses I-, I+ (N m s)."""
+    impulses I-, I+ (N m s); ``run``: its ``variational_flow``, if already integrated."""
     poincare = PoincareMap(hybrid, flow, period, i_minus, i_plus)
-    return multipliers_of(poincare.jacobian(np.concatenate([q0, qd0])))
+    return multipliers_of(poincare.jacobian(np.concatenate([q0, qd0]), run))
 
 
 def closed_loop(walker_factory, x: np.ndarray, step: float = 1e-7) -> Multipliers:

@@ -23,6 +23,7 @@ centre, with the pelvis's axes.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
@@ -141,7 +142,7 @@ class BipedModel:
         """Number of single-support coordinates."""
         return len(self.coordinates)
 
-    @property
+    @cached_property
     def names(self) -> tuple[str, ...]:
         """The single-support coordinates' names, in q order."""
         return tuple(c.name for c in self.coordinates)
@@ -171,26 +172,26 @@ class BipedModel:
     def coordinate_names(self) -> CoordinateNames:
         return CoordinateNames(self.names, self.actuated_names, self.ds_names)
 
-    @property
+    @cached_property
     def ds_of_single(self) -> np.ndarray:
         """Indices in X of the single-support coordinates (a single-support velocity qd is the
-        double-support velocity with qd there and zero elsewhere)."""
+        double-support velocity with qd there and zero elsewhere); read-only, made once."""
         rest = np.arange(2, self.nq) + (4 if self.spin else 3)
-        return np.concatenate([[3, 4], rest])
+        return _frozen(np.concatenate([[3, 4], rest]))
 
-    @property
+    @cached_property
     def actuated(self) -> np.ndarray:
-        """Indices in q of the actuated coordinates (the joint impulses' order)."""
-        return np.array([k for k, c in enumerate(self.coordinates) if c.actuated])
+        """Indices in q of the actuated coordinates (the joint impulses' order); read-only, made once."""
+        return _frozen(np.array([k for k, c in enumerate(self.coordinates) if c.actuated]))
 
     @property
     def actuated_names(self) -> tuple[str, ...]:
         return tuple(self.names[k] for k in self.actuated)
 
-    @property
+    @cached_property
     def ds_actuated(self) -> np.ndarray:
-        """Indices in X of the actuated coordinates."""
-        return self.ds_of_single[self.actuated]
+        """Indices in X of the actuated coordinates; read-only, made once."""
+        return _frozen(self.ds_of_single[self.actuated])
 
     def embed(self, qd: np.ndarray) -> np.ndarray:
         """The double-support velocity (m/s, rad/s) of a single-support velocity ``qd`` (rad/s): the
@@ -223,8 +224,15 @@ class BipedModel:
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """D_e(q), the symmetric inertia matrix of the double-support model (kg, kg m, kg m^2)."""
-        m = pin.crba(self.double_support, self.double_support_data, self.ds_state(q))
-        return np.triu(m) + np.triu(m, 1).T
+        m = pin.crba(self.double_support, self.double_support_data, self.ds_state(q)).copy()
+        lower = self._lower_triangle
+        m[lower] = m.T[lower]  # CRBA fills the upper triangle
+        m += 0.0  # a signed zero reads +0, as the sum of the two triangles gave it
+        return m
+
+    @cached_property
+    def _lower_triangle(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.tril_indices(self.double_support.nv, -1)
 
     def tip_jacobians(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """J1, J2: 3 x nX Jacobians of the stance and swing tips' world positions w.r.t. X (the
@@ -255,6 +263,12 @@ class BipedModel:
         """Angular momentum (kg m^2/s) about the vertical axis through ``point`` (world, m)."""
         p, h_origin, _ = self.momentum(q, xd)
         return float(h_origin[2] - (point[0] * p[1] - point[1] * p[0]))
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a``, made read-only (a model's index arrays are shared by every caller)."""
+    a.flags.writeable = False
+    return a
 
 
 def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
