@@ -135,6 +135,9 @@ def _results_page(sub) -> None:
     page.add_argument("--walk-alpha-step", type=float, default=5.0, metavar="DEG",
                       help="spacing of the arm amplitudes of the walk section's closed loops and largest pushes (deg), "
                       "default 5 (the pushes take about 5 s of CPU time per direction and amplitude)")
+    page.add_argument("--push-directions", nargs="+", default=list(PUSH_DIRECTIONS), choices=PUSH_DIRECTIONS,
+                      metavar="NAME", help="directions of the walk section's largest pushes, default all: "
+                      f"{', '.join(PUSH_DIRECTIONS)}")
     page.add_argument("--pulse-durations", type=float, nargs="*", default=[1.0, 2.0, 5.0, 10.0, 20.0, 50.0],
                       metavar="MS", help="durations of the double support walked in MuJoCo (ms), default 1 2 5 10 20 "
                       "50 (none: no such section)")

@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from biped_gait.core.gait.stability import PoincareMap, closed_loop, multipliers_of
+from biped_gait.core.gait.stability import PoincareMap, closed_loop, multipliers_of, open_loop
 from biped_gait.core.walking.walk import PlannedOrbit, Walker
 
 pytestmark = pytest.mark.core
@@ -36,6 +36,17 @@ def test_the_gait_is_a_fixed_point_and_its_multipliers_match_finite_differences(
     assert np.allclose(np.abs(exact.values[:4]), np.abs(by_differences.values[:4]), rtol=1e-5)
     assert not exact.stable and exact.spectral_radius > 100  # open loop: violently unstable
     assert abs(exact.values[-1]) < 1e-8  # the flow direction: removed by the guard
+
+
+def test_the_planner_s_multipliers_are_those_integrated_in_line(planner, default_gait):
+    """The plan integrates the variational flow on its background thread beside the double
+    support: the Jacobian and the multipliers are those of the Poincare map integrated in line,
+    to the bit."""
+    impulses = default_gait.double_support.impulses
+    in_line = open_loop(planner.hybrid, planner.flow, default_gait.period, default_gait.step.q0, default_gait.step.qd_a,
+                        impulses.i_minus, impulses.i_plus)
+    assert np.array_equal(in_line.jacobian, default_gait.stability.jacobian)
+    assert np.array_equal(in_line.values, default_gait.stability.values)
 
 
 def test_a_perturbation_grows_at_the_predicted_rate(poincare, default_gait):

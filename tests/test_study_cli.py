@@ -142,7 +142,7 @@ def test_figure_commands_write_png(tmp_path, name, options):
 def test_results_page_is_generated_with_its_figures(tmp_path):
     page = tmp_path / "docs" / "results.md"
     proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "45", "--workers", "2",
-               "--pulse-durations", "5", timeout=280)
+               "--pulse-durations", "5", "--push-directions", "left", "right", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
     for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
@@ -162,6 +162,7 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
     assert "| 5 | 20 | " in text and "The largest d tried that walks 20 steps: 5 ms." in text  # MuJoCo, 5 ms pulses
+    assert "| forward | - | - | - |" in text and "The walker takes larger pushes to the " in text  # left and right only
 
 
 @pytest.mark.parametrize("options, alpha, effort", [

@@ -19,6 +19,6 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError(f"--pulse-durations: each must be in [0.1, 100] ms, got {duration:g}")
     with open_executor(args.workers, args.scheduler) as executor:
         paths = write_results_page(args.out, executor, math.radians(args.alpha_step), math.radians(args.walk_alpha_step),
-                                   [d * 1e-3 for d in args.pulse_durations])
+                                   [d * 1e-3 for d in args.pulse_durations], tuple(args.push_directions))
     print("written: " + ", ".join(str(p) for p in paths))
     return 0

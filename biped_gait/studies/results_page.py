@@ -27,6 +27,7 @@ from .figures import save
 from .human_walking import human_comparison
 from .maps import WalkingMaps, compute_maps, optimum_figure, ratio_figure, reading, region_figure, stability_figure
 from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
+from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
 from .hips_page import HIPS_PARAMS, hips_lines, hips_study
@@ -472,11 +473,13 @@ def render(
 
 def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP,
                        walk_alpha_step: float = WALK_ALPHA_STEP,
-                       pulse_durations: Sequence[float] = PULSE_DURATIONS) -> list[Path]:
+                       pulse_durations: Sequence[float] = PULSE_DURATIONS,
+                       push_directions: Sequence[str] = tuple(STUDY_DIRECTIONS)) -> list[Path]:
     """Compute the study for both parameter sets (``PARAMETER_SETS``) on ``executor``, write
     the figures beside ``out`` and the page to ``out``; returns the paths written.
     ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes;
-    ``pulse_durations`` (s): the double supports walked in MuJoCo (none: no such section)."""
+    ``pulse_durations`` (s): the double supports walked in MuJoCo (none: no such section);
+    ``push_directions``: the walk section's push directions (names of ``push_study.STUDY_DIRECTIONS``)."""
     out = Path(out)
     studies = run_study(executor, [load_params(n) for n in PARAMETER_SETS], TABLE_CASES, coarse_step=coarse_step)
     references = {n: Reference.compute(n) for n in PARAMETER_SETS}
@@ -492,7 +495,7 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     all_maps = [compute_maps(study.params, executor, coarse_step=coarse_step) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
-    extensions = _extensions(default, executor, all_maps, coarse_step, walk_alpha_step, pulse_durations)
+    extensions = _extensions(default, executor, all_maps, coarse_step, walk_alpha_step, pulse_durations, push_directions)
     figures["Open-loop spectral radius over (L, T)"] = (
         stability_figure(Atlas.load(atlas_path(default.params, GaitMode.NORMAL), default.params)), STABILITY_FIGURE)
     figures["Effort against the joint-rate bound"] = (
@@ -508,9 +511,10 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
 
 
 def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMaps], coarse_step: float,
-                walk_alpha_step: float, pulse_durations: Sequence[float]) -> Extensions:
+                walk_alpha_step: float, pulse_durations: Sequence[float], push_directions: Sequence[str]) -> Extensions:
     """The sections beyond the paper, for the default parameter set, computed on ``executor``
-    (optima bracketed every ``coarse_step`` rad, the walk's alphas every ``walk_alpha_step``)."""
+    (optima bracketed every ``coarse_step`` rad, the walk's alphas every ``walk_alpha_step``, its
+    pushes in ``push_directions``)."""
     params = default.params
     points = [executor.submit(point_stability, params, *case, comparison.optimum.alpha, mode)
               for case, comparison in default.comparisons.items() if case in FIG4_CASES
@@ -518,6 +522,6 @@ def _extensions(default: Study, executor: Executor, all_maps: Sequence[WalkingMa
     readings = effort_readings(params, executor, coarse_step)
     checks = ReviewerChecks(readings, rate_bound_curve(params, math.radians(PAPER_ALPHA_DEG)),
                             human_comparison(params, coarse_step=coarse_step))
-    walking = compute_walking(executor, default, walk_alpha_step)
+    walking = compute_walking(executor, default, walk_alpha_step, push_directions)
     return Extensions(all_maps, [p.result() for p in points], checks, walking, hips_study(executor, coarse_step),
                       turning_study(executor), pulse_rows(executor, tuple(pulse_durations)))

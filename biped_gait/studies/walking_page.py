@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 
@@ -129,22 +130,26 @@ def speed_ramp(params: BipedParams, alpha: float, speeds: tuple[float, float] = 
     return steps[settle:], follower.rule.describe(), note
 
 
-def compute_walking(executor: Executor, study: Study, alpha_step: float = ALPHA_STEP) -> Walking:
+def compute_walking(executor: Executor, study: Study, alpha_step: float = ALPHA_STEP,
+                    directions: Sequence[str] = (*AXIS_DIRECTIONS, *DIAGONALS)) -> Walking:
     """The section's numbers for ``study``'s parameter set (the default one), on ``executor``:
-    closed loops and pushes every ``alpha_step`` (rad) over [0, 45] deg (the pushes: about 5 s
-    of CPU time each direction and alpha; the section's cost)."""
+    closed loops and pushes every ``alpha_step`` (rad) over [0, 45] deg, the pushes in
+    ``directions`` (names of ``push_study.STUDY_DIRECTIONS``; about 5 s of CPU time each
+    direction and alpha: the section's cost)."""
     params = study.params
     alpha_opt = study.comparisons[FIG5_CASE].optimum.alpha
     length, period = FIG5_CASE
     alphas = inclusive_range(0.0, math.radians(45.0), alpha_step, "arm amplitude")
+    axes = [d for d in AXIS_DIRECTIONS if d in directions]
+    diagonals = [d for d in DIAGONALS if d in directions]
     loops = [executor.submit(closed_loop_radius, params, L, period, a, s)
              for L in FIG4_STEP_LENGTHS for a in alphas for s in (None, DEFAULT_RATE)]
     ramp = executor.submit(speed_ramp, params, alpha_opt)
-    cases = [(a, d) for a in alphas for d in AXIS_DIRECTIONS]
-    cases += [(a, d) for a in (0.0, alpha_opt) for d in DIAGONALS] + [(alpha_opt, d) for d in AXIS_DIRECTIONS]
+    cases = [(a, d) for a in alphas for d in axes]
+    cases += [(a, d) for a in (0.0, alpha_opt) for d in diagonals] + [(alpha_opt, d) for d in axes]
     pushes = run_push_study(executor, params, length, period, GaitMode.NORMAL.value, cases)
-    plain = run_push_study(executor, params, length, period, GaitMode.NORMAL.value,
-                           [(alpha_opt, d) for d in AXIS_DIRECTIONS], steering=None)
+    plain = run_push_study(executor, params, length, period, GaitMode.NORMAL.value, [(alpha_opt, d) for d in axes],
+                           steering=None)
     steps, rule, note = ramp.result()
     return Walking(list(study.curves), [f.result() for f in loops], pushes, plain, alpha_opt, steps, rule, note)
 
@@ -249,6 +254,15 @@ def _push_table(walking: Walking) -> list[str]:
             "|---|---|---|---|", *rows]
 
 
+def _sides(at_opt: dict[str, float]) -> str:
+    """Which side takes the larger push at alpha* (N s by direction), if both were pushed."""
+    if not {"left", "right"} <= at_opt.keys():
+        return ""
+    side = ("to the left, towards the swing foot's side, than to the right, over the stance foot"
+            if at_opt["left"] > at_opt["right"] else "to the right, over the stance foot, than to the left")
+    return f" The walker takes larger pushes {side} ({at_opt['left']:.3g} against {at_opt['right']:.3g} N s at alpha*)."
+
+
 def walking_section(walking: Walking, figures: dict[str, str]) -> list[str]:
     """The section's Markdown lines; ``figures`` maps its captions to paths."""
     steered = [lp.radius for lp in walking.loops if lp.steering is not None]
@@ -276,13 +290,10 @@ def walking_section(walking: Walking, figures: dict[str, str]) -> list[str]:
              "is the largest below which every push tried was recovered (N s):", ""]
     lines += _push_table(walking)
     at_opt = {p.direction: p.limit for p in walking.pushes if p.alpha == walking.alpha_opt}
-    side = ("to the left, towards the swing foot's side, than to the right, over the stance foot"
-            if at_opt["left"] > at_opt["right"] else "to the right, over the stance foot, than to the left")
     lines += ["", "The pushes are small: the single support is ballistic, so a push acts uncorrected until the next "
               "touchdown, amplified by the open-loop instability over half a step; the re-aim and the impulses can "
               "then only correct what reaches the double support (pushes fail by a re-aim without solution or a "
-              f"double support whose impulse LP is infeasible). The walker takes larger pushes {side} "
-              f"({at_opt['left']:.3g} against {at_opt['right']:.3g} N s at alpha*). Failures of the first push not "
+              "double support whose impulse LP is infeasible)." + _sides(at_opt) + " Failures of the first push not "
               "recovered, per direction at alpha*: "
               + "; ".join(f"{p.direction} {p.first_failure:.3g} N s, {p.failure}" for p in walking.pushes
                           if p.alpha == walking.alpha_opt and p.direction in AXIS_DIRECTIONS) + ".", "",

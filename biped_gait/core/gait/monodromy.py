@@ -32,8 +32,14 @@ class BackgroundVariationalFlow:
 
     def start(self, period: float, q0: np.ndarray, qd0: np.ndarray) -> Future[FlowResult]:
         """Begin the variational flow from (q0 rad, qd0 rad/s) over ``period`` (s); its result
-        is the future's."""
+        is the future's (integrated here and now once the interpreter is shutting down, when no
+        thread may start)."""
         if self._executor is None or self._pid != os.getpid():  # a forked child has no thread of its parent's
             self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="variational-flow")
             self._pid = os.getpid()
-        return self._executor.submit(variational_flow, self.flow, period, np.array(q0), np.array(qd0))
+        try:
+            return self._executor.submit(variational_flow, self.flow, period, np.array(q0), np.array(qd0))
+        except RuntimeError:  # "cannot schedule new futures after (interpreter) shutdown"
+            done: Future[FlowResult] = Future()
+            done.set_result(variational_flow(self.flow, period, q0, qd0))
+            return done
