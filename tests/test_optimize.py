@@ -92,4 +92,4 @@ def test_bad_ranges_are_refused(planner, alpha_range, step, message):
 
 def test_no_admissible_gait_is_said_plainly(planner):
     with pytest.raises(NoAdmissibleGait, match=r"no admissible normal gait at L = 0.45 m, T = 1.5 s on \[0, 45\] deg"):
-        optimal_arm_amplitude(planner, 0.45, 1.5, "normal", coarse_step=math.radians(15))
+        optimal_arm_amplitude(planner, 0.45, 1.5, "normal", coarse_step=math.radians(45))

@@ -122,7 +122,7 @@ def test_optimize_arms_says_when_there_is_no_interior_minimum():
 
 
 def test_optimize_arms_without_any_admissible_gait_exits_1():
-    proc = run("optimize-arms", "--period", "1.5", "--alpha-deg-range", "0", "45", "15")
+    proc = run("optimize-arms", "--period", "1.5", "--alpha-deg-range", "0", "45", "45")
     assert proc.returncode == 1
     assert proc.stderr.startswith("biped-gait: no admissible normal gait at L = 0.45 m, T = 1.5 s")
 
