@@ -1,7 +1,8 @@
 """Benchmark: the simulator's real-time factor at 1 kHz, as fast as possible (real_time_factor 0),
 10 steps of the default gait, planner and simulator as real node processes, with every topic
 published and recorded, and with recording off; beside it, in the same run, the walker alone
-(integration, events, double supports, samples: no world view, no ROS), the walker with the
+(integration, events, double supports, samples, the node's default re-aim with momentum
+steering: no world view, no ROS), the walker with the
 world view and the messages serialized (no ROS), the straightforward cold solve (the machine's
 yardstick, ``yardsticks.ColdSolve``: the node's factor is also given as it would be on the
 reference machine) and the cost of one message each way. Each real-time factor is the median of
@@ -36,6 +37,7 @@ from sensor_msgs.msg import JointState  # noqa: E402
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.core.dynamics.samples import NativeSamples  # noqa: E402
 from biped_gait.core.model.params import load_params  # noqa: E402
+from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
 from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
 from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
@@ -57,14 +59,15 @@ def per_call_us(call, count: int = 20000) -> float:
 
 def core_factors(planner: GaitPlanner, steps: int) -> tuple[float, float]:
     """Real-time factors of the walker alone, and of the walk's step batches with the world view
-    and every sampled message serialized (what the node does before publishing)."""
+    and every sampled message serialized (what the node does before publishing); both walk as the
+    node does by default (re-aim with momentum steering at ``DEFAULT_RATE``)."""
     orbit = PlannedOrbit.of(planner.plan(REQUEST))
-    walker = Walker(planner.hybrid, orbit, RATE)
+    walker = Walker(planner.hybrid, orbit, RATE, momentum_rate=DEFAULT_RATE)
     start = time.perf_counter()
     for _ in range(steps):
         walker.walk_step()
     walker_rtf = walker.state.t / (time.perf_counter() - start)
-    walk = Walk(orbit, RATE, steps)
+    walk = Walk(orbit, RATE, steps, momentum_rate=DEFAULT_RATE)
     messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
     start, simulated = time.perf_counter(), 0.0
     for item in walk.batches():
