@@ -14,7 +14,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import re
 import statistics
 import tempfile
 import time
@@ -27,47 +26,10 @@ from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.core.walking.mujoco_engine import MujocoEngine  # noqa: E402
 from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
 from biped_gait.core.walking.walk import Finished, PlannedOrbit, Walk  # noqa: E402
-from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
+from harness import RATE, Timed, median_range, simulator_factor  # noqa: E402
 
-RATE = 1000.0
 PULSE = 0.005
 REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
-
-
-def node_factor(where: Path, steps: int, engine: str) -> float:
-    """The simulator node's real-time factor (from its log) with ``engine``, recording, against a
-    planner of its own."""
-    where.mkdir(exist_ok=True)
-    planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / "planner.log", cwd=where)
-    try:
-        sim = start_entry("biped-gait-simulator", [
-            "-p", f"steps:={steps}", "-p", "real_time_factor:=0.0", "-p", f"publish_rate:={RATE}",
-            "-p", "exit_when_done:=true", "-p", "record:=true", "-p", f"record_dir:={where}/bags",
-            "-p", f"engine:={engine}", "-p", f"pulse_duration:={PULSE}"],
-            log=where / "simulator.log", cwd=where)
-        sim.wait(timeout=900)
-    finally:
-        stop_process(planner)
-    log = (where / "simulator.log").read_text()
-    match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
-    assert match, log
-    return float(match.group(2))
-
-
-class _Timed:
-    """Wall time (s) spent in one method of an object, summed over its calls."""
-
-    def __init__(self, owner: object, name: str) -> None:
-        self.total, method = 0.0, getattr(owner, name)
-
-        def timed(*args, **kwargs):
-            start = time.perf_counter()
-            try:
-                return method(*args, **kwargs)
-            finally:
-                self.total += time.perf_counter() - start
-
-        setattr(owner, name, timed)
 
 
 def core_walk(planner: GaitPlanner, steps: int, engine: str) -> tuple[float, float, float]:
@@ -79,16 +41,12 @@ def core_walk(planner: GaitPlanner, steps: int, engine: str) -> tuple[float, flo
     engine_object = walk.walker.engine
     stepping = planning = None
     if isinstance(engine_object, MujocoEngine):
-        stepping, planning = _Timed(engine_object, "_advance"), _Timed(engine_object, "_plan")
+        stepping, planning = Timed(engine_object, "_advance"), Timed(engine_object, "_plan")
     start = time.perf_counter()
     items = list(walk.batches())
     wall = time.perf_counter() - start
     assert isinstance(items[-1], Finished), items[-1]
     return (items[-1].t / wall, stepping.total if stepping else 0.0, planning.total if planning else 0.0)
-
-
-def summary(values: list[float]) -> str:
-    return f"{statistics.median(values):6.2f} [{min(values):.2f}, {max(values):.2f}]"
 
 
 def main() -> None:
@@ -102,15 +60,16 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.repeat):
             for engine in ("hybrid", "mujoco"):
-                nodes[engine].append(node_factor(Path(tmp) / f"{engine}_{k}", args.steps, engine))
+                nodes[engine].append(simulator_factor(Path(tmp) / f"{engine}_{k}", args.steps, [
+                    "record:=true", f"engine:={engine}", f"pulse_duration:={PULSE}"], timeout=900.0))
                 cores[engine].append(core_walk(planner, args.steps, engine))
     simulated = args.steps * REQUEST.period
     print(f"{args.steps} steps of the default gait at {RATE:g} Hz, MuJoCo's pulses {PULSE * 1e3:g} ms; "
           f"real-time factor, median of {args.repeat} [range]")
     for engine in ("hybrid", "mujoco"):
-        print(f"  node, engine:={engine}, every topic published and recorded: {summary(nodes[engine])}")
+        print(f"  node, engine:={engine}, every topic published and recorded: {median_range(nodes[engine])}")
     for engine in ("hybrid", "mujoco"):
-        print(f"  walk alone (core Walk, world view, no ROS), {engine}:        {summary([c[0] for c in cores[engine]])}")
+        print(f"  walk alone (core Walk, world view, no ROS), {engine}:        {median_range([c[0] for c in cores[engine]])}")
     stepping = statistics.median(c[1] for c in cores["mujoco"])
     planning = statistics.median(c[2] for c in cores["mujoco"])
     print(f"  MuJoCo walk of about {simulated:.1f} s simulated: MuJoCo's steps {stepping:.3f} s, planning the double "

@@ -22,6 +22,7 @@ import subprocess
 import sys
 import time
 
+from harness import Timed
 from yardsticks import ColdSolve, median_s
 
 
@@ -33,16 +34,7 @@ def child(plans: int) -> None:
     start = time.perf_counter()
     planner = planning.GaitPlanner()
     made = time.perf_counter()
-    in_open_loop = []
-    open_loop = planning.open_loop
-
-    def timed_open_loop(*args, **kwargs):
-        begin = time.perf_counter()
-        out = open_loop(*args, **kwargs)
-        in_open_loop.append(time.perf_counter() - begin)
-        return out
-
-    planning.open_loop = timed_open_loop
+    in_open_loop = Timed(planning, "open_loop")
     times, found = [], set()
     alphas = [math.radians(15.0 + 15.0 * k / max(1, plans - 1)) for k in range(plans)]
     for alpha in alphas + alphas[:1]:
@@ -51,7 +43,7 @@ def child(plans: int) -> None:
         times.append(time.perf_counter() - begin)
         found.add(gait.found)
     flow = median_s(lambda: variational_flow(planner.flow, 0.45, gait.step.q0, gait.step.qd_a), 5)
-    print(json.dumps({"make": made - start, "plans": times, "found": sorted(found), "open_loop": in_open_loop[1:-1],
+    print(json.dumps({"make": made - start, "plans": times, "found": sorted(found), "open_loop": in_open_loop.calls[1:-1],
                       "variational_flow": flow}))
 
 

@@ -18,7 +18,6 @@ import argparse
 import io
 import math
 import os
-import re
 import statistics
 import tempfile
 import time
@@ -41,11 +40,10 @@ from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
 from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
 from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
-from biped_gait.ros.launch import start_entry, stop_process  # noqa: E402
 from biped_gait.ros.walk_messages import SampleMessages  # noqa: E402
+from harness import RATE, median_range, simulator_factor  # noqa: E402
 from yardsticks import ColdSolve, at_reference, median_s  # noqa: E402
 
-RATE = 1000.0
 REQUEST = GaitRequest(0.45, 0.45, math.radians(23.5), "normal")
 
 
@@ -115,29 +113,6 @@ def message_costs(tmp: Path) -> dict[str, float]:
     return costs
 
 
-def factors(values: list[float]) -> str:
-    return f"{statistics.median(values):6.2f} [{min(values):.2f}, {max(values):.2f}]"
-
-
-def node_factor(where: Path, steps: int, record: bool) -> float:
-    """The simulator node's real-time factor (from its log), against a planner."""
-    where.mkdir(exist_ok=True)
-    tag = "on" if record else "off"
-    planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / f"planner_{tag}.log", cwd=where)
-    try:
-        sim = start_entry("biped-gait-simulator", [
-            "-p", f"steps:={steps}", "-p", "real_time_factor:=0.0", "-p", f"publish_rate:={RATE}",
-            "-p", "exit_when_done:=true", "-p", f"record:={str(record).lower()}", "-p", f"record_dir:={where}/bags"],
-            log=where / f"simulator_{tag}.log", cwd=where)
-        sim.wait(timeout=600)
-    finally:
-        stop_process(planner)
-    log = (where / f"simulator_{tag}.log").read_text()
-    match = re.search(r"walk finished: .* in ([0-9.]+) s wall time \(real-time factor ([0-9.]+)\)", log)
-    assert match, log
-    return float(match.group(2))
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=10)
@@ -153,8 +128,8 @@ def main() -> None:
             walker_rtf, encoded_rtf = core_factors(planner, args.steps)
             walker.append(walker_rtf)
             encoded.append(encoded_rtf)
-            recorded.append(node_factor(where / f"run{run}", args.steps, record=True))
-            unrecorded.append(node_factor(where / f"run{run}", args.steps, record=False))
+            recorded.append(simulator_factor(where / f"run{run}", args.steps, ["record:=true"], "on"))
+            unrecorded.append(simulator_factor(where / f"run{run}", args.steps, ["record:=false"], "off"))
             colds.extend(median_s(yardstick.solve, 1) for _ in range(2))
         costs = message_costs(where)
     simulated = args.steps * REQUEST.period
@@ -162,12 +137,12 @@ def main() -> None:
     cold = median(colds)
     print(f"simulator at {RATE:g} Hz, {args.steps} steps ({simulated:.2f} s simulated), as fast as possible, "
           f"median of {args.repeat} runs [range]; the straightforward cold solve: {1e3 * cold:.1f} ms (median)")
-    print(f"  node, every topic published and recorded: real-time factor {factors(recorded)}; on the reference machine "
+    print(f"  node, every topic published and recorded: real-time factor {median_range(recorded)}; on the reference machine "
           f"{at_reference(median(recorded), cold):.1f}")
-    print(f"  node, published, recording off:           real-time factor {factors(unrecorded)}")
-    print(f"  walker alone (no world view, no ROS):     real-time factor {factors(walker)}; "
+    print(f"  node, published, recording off:           real-time factor {median_range(unrecorded)}")
+    print(f"  walker alone (no world view, no ROS):     real-time factor {median_range(walker)}; "
           f"node with recording / walker alone = {median(recorded) / median(walker):.2f}")
-    print(f"  walker + world view + messages serialized (no ROS): real-time factor {factors(encoded)}")
+    print(f"  walker + world view + messages serialized (no ROS): real-time factor {median_range(encoded)}")
     print(f"  (samples evaluated {'in the compiled twin' if NativeSamples is not None else 'by the Python loops'})")
     print("per message (us):")
     for what, cost in costs.items():
