@@ -49,6 +49,18 @@ def test_the_planner_s_multipliers_are_those_integrated_in_line(planner, default
     assert np.array_equal(in_line.values, default_gait.stability.values)
 
 
+def test_the_double_supports_solved_together_are_those_solved_one_by_one(planner, default_gait):
+    """The reset's central differences solve their 2 nq double supports as stacks: the same
+    numbers, to the bit, as one ``ImpactMap`` after another."""
+    impulses = default_gait.double_support.impulses
+    step = default_gait.step
+    q = step.nodes[1][-1]
+    moved = np.concatenate([q + 1e-6 * np.eye(len(q)), q - 1e-6 * np.eye(len(q))])
+    together = planner.hybrid.forward_at(moved, step.qd_b, impulses.i_minus, impulses.i_plus)
+    one_by_one = [planner.hybrid.impact(c).forward(step.qd_b, impulses.i_minus, impulses.i_plus) for c in moved]
+    assert np.array_equal(together, np.array(one_by_one))
+
+
 def test_a_perturbation_grows_at_the_predicted_rate(poincare, default_gait):
     x0 = start(default_gait)
     values, vectors = np.linalg.eig(default_gait.stability.jacobian)

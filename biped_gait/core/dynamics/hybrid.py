@@ -137,12 +137,7 @@ class ImpactMap:
     def __init__(self, bm: BipedModel, exchange: LinearExchange | KinematicExchange, q_t: np.ndarray) -> None:
         self.bm, self.exchange, self.q_t = bm, exchange, q_t
         self.mass_matrix = bm.mass_matrix(q_t)
-        self.j1, self.j2 = bm.tip_jacobians(q_t)
-        if bm.spin:
-            spin = np.zeros(bm.double_support.nv)
-            spin[5] = 1.0
-            self.j1 = np.vstack([self.j1, spin])
-            self.j2 = np.vstack([self.j2, exchange.spin_row(q_t)])
+        self.j1, self.j2 = contact_jacobians(bm, exchange, q_t)
         self.locked_rotation = locked_rotation(bm, q_t)
         self.layout = ImpactLayout.of(bm)
 
@@ -181,10 +176,7 @@ class ImpactMap:
         else:
             xd_b = np.zeros((bm.double_support.nv, qd_b.shape[1]))
             xd_b[bm.ds_of_single] = qd_b
-        rows = self.layout.joints
-        xd_minus = impact_with(self.mass_matrix, self.j1, xd_b, i_minus, rows, at_rest=False)
-        xd_plus = impact_with(self.mass_matrix, self.j2, xd_minus, np.zeros(self.layout.na), rows, at_rest=True)
-        xd_a = impact_with(self.mass_matrix, self.j2, xd_plus, i_plus, rows, at_rest=True)
+        xd_a = double_support(self.mass_matrix, self.j1, self.j2, xd_b, i_minus, i_plus, self.layout)
         return self.exchange.velocity(self.q_t, xd_a)
 
     def closure_gradients(self) -> tuple[np.ndarray, np.ndarray]:
@@ -195,18 +187,55 @@ class ImpactMap:
         return d_a, -row[self.bm.ds_of_single]
 
 
+def contact_jacobians(bm: BipedModel, exchange: LinearExchange | KinematicExchange,
+                      q_t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """J1, J2 at the touchdown configuration ``q_t`` (rad): the old and new stance tips' positions
+    (3 rows each, m per unit of X), each with a fourth row with lateral hip joints, the foot's
+    spin about its shin (rad/s; ``ImpactMap``)."""
+    j1, j2 = bm.tip_jacobians(q_t)
+    if bm.spin:
+        spin = np.zeros(bm.double_support.nv)
+        spin[5] = 1.0
+        j1, j2 = np.vstack([j1, spin]), np.vstack([j2, exchange.spin_row(q_t)])
+    return j1, j2
+
+
+def double_support(mass_matrix: np.ndarray, j1: np.ndarray, j2: np.ndarray, xd_b: np.ndarray, i_minus: np.ndarray,
+                   i_plus: np.ndarray, layout: ImpactLayout) -> np.ndarray:
+    """Xd^a (double-support coordinates) after eqs. (6)-(10) run forward from ``xd_b`` as three
+    impacts (``ImpactMap.forward``): I^- (N m s) with the old stance tip (``j1``) keeping its
+    velocity, the passive impact and I^+ with the new one (``j2``) at rest. The arguments are
+    ``impact_with``'s: one double support, or stacks of them."""
+    rows = layout.joints
+    xd_minus = impact_with(mass_matrix, j1, xd_b, i_minus, rows, at_rest=False)
+    xd_plus = impact_with(mass_matrix, j2, xd_minus, np.zeros(layout.na), rows, at_rest=True)
+    return impact_with(mass_matrix, j2, xd_plus, i_plus, rows, at_rest=True)
+
+
 def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, joint_impulse: np.ndarray,
                 rows: np.ndarray | slice, at_rest: bool) -> np.ndarray:
     """The double-support velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R
     with the contact of ``contact`` (J, c x nX) at rest after it (``at_rest``) or keeping its
     velocity (J Xd' = J Xd); ``joint_impulse`` I on the actuated coordinates, rows ``rows`` of X
-    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each)."""
-    n, c = mass_matrix.shape[0], contact.shape[0]
-    kkt = np.zeros((n + c, n + c))
-    kkt[:n, :n], kkt[:n, n:], kkt[n:, :n] = mass_matrix, -contact.T, contact
-    rhs = np.concatenate([mass_matrix @ xd, np.zeros((c,) + xd.shape[1:]) if at_rest else contact @ xd])
-    rhs[rows] += joint_impulse if xd.ndim == 1 else joint_impulse[:, None]
-    return np.linalg.solve(kkt, rhs)[:n]
+    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each); with
+    stacks of s double supports (``mass_matrix`` s x nX x nX, ``contact`` s x c x nX), ``xd`` is
+    s x nX, a velocity for each (the linear systems solved together: the same numbers as one by
+    one)."""
+    n, c = mass_matrix.shape[-1], contact.shape[-2]
+    stacked = mass_matrix.ndim == 3
+    if stacked:
+        xd = xd[..., None]
+    kkt = np.zeros(mass_matrix.shape[:-2] + (n + c, n + c))
+    kkt[..., :n, :n], kkt[..., :n, n:], kkt[..., n:, :n] = mass_matrix, -np.swapaxes(contact, -1, -2), contact
+    moved = mass_matrix @ xd
+    held = np.zeros(moved.shape[:-2] + (c,) + moved.shape[-1:] if moved.ndim > 1 else (c,)) if at_rest else contact @ xd
+    rhs = np.concatenate([moved, held], axis=0 if xd.ndim == 1 else -2)
+    if xd.ndim == 1:
+        rhs[rows] += joint_impulse
+    else:
+        rhs[..., rows, :] += joint_impulse[:, None]
+    solved = np.linalg.solve(kkt, rhs)[..., :n, :] if xd.ndim > 1 else np.linalg.solve(kkt, rhs)[:n]
+    return solved[..., 0] if stacked else solved
 
 
 class HybridStep:
@@ -232,3 +261,15 @@ class HybridStep:
     def impact(self, q_t: np.ndarray) -> ImpactMap:
         """The reset's double support at touchdown configuration ``q_t``."""
         return ImpactMap(self.bm, self.exchange, q_t)
+
+    def forward_at(self, configurations: np.ndarray, qd_b: np.ndarray, i_minus: np.ndarray,
+                   i_plus: np.ndarray) -> np.ndarray:
+        """``impact(q).forward(qd_b, i_minus, i_plus)`` for each touchdown configuration q, the
+        rows of ``configurations`` (k x nq, rad): the next step's initial joint velocities (rad/s,
+        k x nq), the k double supports' linear systems solved together (the same numbers)."""
+        bm = self.bm
+        mass = np.array([bm.mass_matrix(q) for q in configurations])
+        j1, j2 = (np.array(j) for j in zip(*(contact_jacobians(bm, self.exchange, q) for q in configurations)))
+        xd_b = np.broadcast_to(bm.embed(qd_b), (len(configurations), bm.double_support.nv))
+        xd_a = double_support(mass, j1, j2, xd_b, i_minus, i_plus, ImpactLayout.of(bm))
+        return np.array([self.exchange.velocity(q, xd) for q, xd in zip(configurations, xd_a)])

@@ -36,7 +36,7 @@ from .figures import StepFigures, energy_drift, step_figures
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import BackgroundVariationalFlow
-from .stability import PoincareMap, multipliers_of, open_loop
+from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 from .stride import solve_stride
 from .turning_atlas import TurningAtlas, turning_atlas_path
 
@@ -467,10 +467,15 @@ class GaitPlanner:
         else:
             gait = self._unsettled(problem, step, found)
         if gait.double_support is not None and gait.double_support.impulses.success:
-            impulses = gait.double_support.impulses
-            gait = replace(gait, stability=open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a,
-                                                     impulses.i_minus, impulses.i_plus, flow.result()))
+            gait = replace(gait, stability=self._multipliers(problem, step, gait.double_support.impulses, flow))
         return gait
+
+    def _multipliers(self, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
+                     flow: Future[FlowResult]) -> Multipliers:
+        """The open-loop multipliers of the solved ``step`` with its ``impulses``, from ``flow``,
+        the step's variational flow begun on the background thread (waited for here)."""
+        return open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a, impulses.i_minus,
+                         impulses.i_plus, flow.result())
 
     def _variational_flow(self, problem: GaitProblem, step: BvpSolution) -> Future[FlowResult] | None:
         """The step's full-state variational flow (for its multipliers), begun on the background

@@ -99,15 +99,18 @@ class PoincareMap:
         return self._reset_jacobian(q, qd) @ pre
 
     def _reset_jacobian(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """d reset / d (q, qd) (2 nq x 2 nq): the velocity part exactly (the reset is linear in
-        qd), the configuration part by central differences."""
+        """d reset / d (q, qd) (2 nq x 2 nq) at the pre-impact state (q, qd) (rad, rad/s): the
+        velocity part exactly (the reset is linear in qd), the configuration part by central
+        differences (the 2 nq double supports solved together)."""
         n, na = len(q), len(self.i_minus)
         out = np.zeros((2 * n, 2 * n))
         out[n:, n:] = self.hybrid.impact(q).forward(np.eye(n), np.zeros(na), np.zeros(na))
-        for j in range(n):
-            step = np.zeros(n)
-            step[j] = FD_STEP
-            out[:, j] = (self.reset(q + step, qd) - self.reset(q - step, qd)) / (2 * FD_STEP)
+        steps = FD_STEP * np.eye(n)
+        moved = np.concatenate([q + steps, q - steps])  # q + h e_j, then q - h e_j (rows)
+        exchange = self.hybrid.exchange
+        resets = np.hstack([[exchange.configuration(c) for c in moved],
+                            self.hybrid.forward_at(moved, qd, self.i_minus, self.i_plus)])
+        out[:, :n] = ((resets[:n] - resets[n:]) / (2 * FD_STEP)).T
         return out
 
 
