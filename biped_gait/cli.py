@@ -32,8 +32,9 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``biped-gait``; returns the process exit status."""
+    argv = sys.argv[1:] if argv is None else argv
     try:
-        args = build_parser().parse_args(argv)
+        args = build_parser(argv[0] if argv else None).parse_args(argv)
     except SystemExit as exc:  # --help (0), or bad usage (2, its one line printed)
         return int(exc.code or 0)
     warnings.showwarning = _one_line_warning

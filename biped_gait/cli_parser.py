@@ -207,10 +207,17 @@ def _mujoco(sub) -> None:
     _run(check, "mujoco:check")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``biped-gait`` parser with every verb."""
+ADDERS = {"plan": _plan, "sweep": _sweep, "optimize-arms": _optimize, "figure": _figure, "maps": _maps,
+          "push-study": _push, "results-page": _results_page, "atlas": _atlas, "urdf": _files, "recover": _files,
+          "mjcf": _mujoco, "check-mujoco": _mujoco}
+"""Each verb and the function that adds its parser (some add two)."""
+
+
+def build_parser(verb: str | None = None) -> argparse.ArgumentParser:
+    """The ``biped-gait`` parser with every verb, or, for a ``verb`` of ``ADDERS``, with that
+    verb's parsers alone (what a run of it parses: the others cost it nothing)."""
     top = OneLineParser(prog=PROG, description=DESCRIPTION)
     sub = top.add_subparsers(dest="command", required=True, metavar="VERB")
-    for add in (_plan, _sweep, _optimize, _figure, _maps, _push, _results_page, _atlas, _files, _mujoco):
+    for add in [ADDERS[verb]] if verb in ADDERS else dict.fromkeys(ADDERS.values()):
         add(sub)
     return top

@@ -150,3 +150,13 @@ def test_without_an_atlas_the_planner_continues_from_the_seed():
     gait = planner.plan(GaitRequest(0.45, 0.55, math.radians(23.5)))
     assert gait.admissible and gait.found == "continuation" and gait.figures.q9_min >= -1e-9
     assert not gait.hint
+
+
+def test_a_planner_made_for_one_mode_loads_the_other_mode_s_atlas_when_asked():
+    """``modes``: the atlases loaded when the planner is made (one for a process that plans one
+    gait); another mode's atlas is loaded on its first request, which it answers from it."""
+    planner = GaitPlanner(modes=("normal",))
+    assert set(planner._atlases) == {GaitMode.NORMAL}
+    gait = planner.plan(GaitRequest(0.45, 0.45, math.radians(20.0), "anti-normal"))
+    assert gait.admissible and gait.found == "atlas"
+    assert set(planner._atlases) == set(GaitMode)

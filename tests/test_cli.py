@@ -44,6 +44,21 @@ def test_plan_and_help_import_only_what_they_use():
         assert proc.stdout.strip() == "[]", (argv, proc.stdout)
 
 
+def test_a_verb_parsed_alone_is_the_verb_of_the_whole_parser():
+    """``biped-gait VERB`` builds that verb's parser only: every verb of the whole parser is in
+    ``ADDERS``, and its help is the same built alone."""
+    from biped_gait.cli_parser import ADDERS, build_parser
+
+    def verbs(parser) -> dict:
+        action = next(a for a in parser._actions if a.dest == "command")
+        return {name: sub.format_help() for name, sub in action.choices.items()}
+
+    whole = verbs(build_parser())
+    assert set(whole) == set(ADDERS)
+    for verb in ADDERS:
+        assert verbs(build_parser(verb))[verb] == whole[verb]
+
+
 def test_plan_options_reach_the_core():
     proc = run("plan", "--step-length", "0.40", "--alpha-deg", "20", "--mode", "anti-normal",
                "--params", "aoustin2013-table", "--closure", "slack", "--effort", "l2")

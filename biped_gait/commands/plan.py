@@ -23,7 +23,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_folder(args.out, "--out", force=True)
     fields = request_fields(args, exclude=("params",))
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
-    planner = GaitPlanner(args.params)
+    planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
         gait = planner.plan_stride(request)
         print(views.stride_summary(gait))

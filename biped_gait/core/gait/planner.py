@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
 
@@ -182,12 +182,13 @@ class GaitPlanner:
     """
 
     def __init__(self, params: BipedParams | str | None = None, settings: Settings = DEFAULTS, atlas: bool = True,
-                 on_note: Callable[[str], None] | None = None):
+                 on_note: Callable[[str], None] | None = None, modes: Iterable[GaitMode | str] | None = None):
         """``params``: a parameter set, its name or file (None: the default); ``settings``: the
         numerical settings (grids, tolerance, iterations, samples); ``atlas``: use the gait
         atlas of these parameters (shipped, or in the cache) when there is a current one, loaded
-        here for every mode; ``on_note``: told (once per mode) why there is none (default: a
-        Python warning)."""
+        here for each of ``modes`` (None: every mode; another mode's is loaded when first asked
+        for: a process that plans one gait loads one atlas); ``on_note``: told (once per mode)
+        why there is none (default: a Python warning)."""
         self.settings = settings
         self.source = params if isinstance(params, str) else None
         self.params = params if isinstance(params, BipedParams) else load_params(params)
@@ -202,7 +203,7 @@ class GaitPlanner:
         self.flow = self.hybrid.flow(settings.fine_steps)
         self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
         self._background = BackgroundVariationalFlow(BallisticFlow(self.model.single, settings.fine_steps))
-        for mode in GaitMode:
+        for mode in GaitMode if modes is None else map(GaitMode.parse, modes):
             self._atlases[mode] = self._load_atlas(mode)
 
     def _load_atlas(self, mode: GaitMode) -> Atlas | None:
@@ -216,9 +217,11 @@ class GaitPlanner:
             return None
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
-        """The current atlas of these parameters and ``mode`` (loaded when the planner is made),
-        or None; why not is in ``atlas_notes[mode]``, said once as a note when the mode is first
-        asked for."""
+        """The current atlas of these parameters and ``mode`` (loaded when the planner is made,
+        or now if it was not among its modes), or None; why not is in ``atlas_notes[mode]``,
+        said once as a note when the mode is first asked for."""
+        if mode not in self._atlases:
+            self._atlases[mode] = self._load_atlas(mode)
         if mode in self.atlas_notes and mode not in self._told:
             self._told.add(mode)
             self._note(f"{self.atlas_notes[mode]}; planning without it ({mode.value} gaits)")
