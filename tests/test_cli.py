@@ -31,10 +31,11 @@ def test_plan_defaults_prints_a_converged_admissible_gait(tmp_path):
 
 
 def test_plan_and_help_import_only_what_they_use():
-    """No plotting, progress bars, MCAP, study modules, OSQP or SciPy's optimize for one gait or
-    a verb's help (they cost a plan process more than its solve)."""
+    """No plotting, progress bars, MCAP, study modules, OSQP, SciPy's optimize or the strides'
+    modules for one straight gait or a verb's help (they cost a plan process more than its solve)."""
     heavy = ("matplotlib", "tqdm", "mcap", "osqp", "scipy.optimize", "scipy.sparse", "dask", "rclpy",
-             "biped_gait.studies.study", "biped_gait.studies.maps", "biped_gait.studies.results_page")
+             "biped_gait.studies.study", "biped_gait.studies.maps", "biped_gait.studies.results_page",
+             "biped_gait.core.gait.stride", "biped_gait.core.gait.turning_atlas")
     for argv in (["plan"], ["sweep", "--help"], ["push-study", "--help"], ["atlas", "build", "--help"]):
         code = ("import contextlib, io, sys\nfrom biped_gait.cli import main\n"
                 f"with contextlib.redirect_stdout(io.StringIO()), contextlib.suppress(SystemExit): main({argv!r})\n"

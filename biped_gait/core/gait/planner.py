@@ -18,6 +18,7 @@ import warnings
 from collections.abc import Callable, Iterable
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -37,8 +38,9 @@ from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import BackgroundVariationalFlow
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
-from .stride import solve_stride
-from .turning_atlas import TurningAtlas, turning_atlas_path
+
+if TYPE_CHECKING:
+    from .turning_atlas import TurningAtlas
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
 BRANCH_BOUND = 1.0  # rad/s: a solve that ends farther than this from its warm start left the branch
@@ -303,6 +305,8 @@ class GaitPlanner:
     def turning_atlas(self, mode: GaitMode) -> TurningAtlas | None:
         """The current turning atlas of these parameters and ``mode`` (loaded once), or None (no
         lateral hips, no atlas, or a stale one: said once, as for ``atlas``)."""
+        from .turning_atlas import TurningAtlas, turning_atlas_path  # strides only: a straight plan does without
+
         if mode not in self._turning_atlases:
             atlas = None
             if self.use_atlas and self.params.joints.lateral_hips:
@@ -316,6 +320,8 @@ class GaitPlanner:
     def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess`` on the fine grid, its closures matched
         to what the spin moments do (legs leaning), with its multipliers if ``stability``."""
+        from .stride import solve_stride  # strides only: a straight plan does without
+
         targets = np.zeros(2)
         closure = _ClosureRounds()
         for _ in range(CLOSURE_ROUNDS):
@@ -380,6 +386,8 @@ class GaitPlanner:
         warm-started from the last, halved where it fails or jumps (``continuation.BRANCH_JUMP``);
         the curvatures (1/m) reached and their strides, the last nearest the request's (the
         start's first: the straight gait's at a vanishing curvature, if no step succeeds)."""
+        from .stride import solve_stride
+
         target = 1.0 / problem.turn_radius
         if start is None:
             origin, guess = 0.0, (straight.qd_a, straight.theta, straight.qd_a, straight.theta)
