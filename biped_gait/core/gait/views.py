@@ -221,7 +221,8 @@ def summary(gait: Gait) -> str:
         moduli = ", ".join(f"{m:.3g}" for m in np.abs(gait.stability.values[:6]))
         lines.append(f"open-loop Floquet multipliers |lambda| {moduli}, ...: spectral radius "
                      f"{gait.stability.spectral_radius:.4g}, {'stable' if gait.stability.stable else 'unstable'}")
-    lines.append(f"solve time {gait.solve_time_s * 1000:.1f} ms, {d['dynamics_evaluations']} dynamics evaluations")
+    timed = "" if math.isnan(gait.solve_time_s) else f"solve time {gait.solve_time_s * 1000:.1f} ms, "  # a stride's steps: timed with it
+    lines.append(f"{timed}{d['dynamics_evaluations']} dynamics evaluations")
     return "\n".join(lines)
 
 
