@@ -9,6 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.gait.stability import PoincareMap, closed_loop, multipliers_of, open_loop
 from biped_gait.core.walking.walk import PlannedOrbit, Walker
 
@@ -47,6 +48,21 @@ def test_the_planner_s_multipliers_are_those_integrated_in_line(planner, default
                         impulses.i_minus, impulses.i_plus)
     assert np.array_equal(in_line.jacobian, default_gait.stability.jacobian)
     assert np.array_equal(in_line.values, default_gait.stability.values)
+
+
+def test_a_plan_integrates_one_variational_flow_begun_at_its_last_chord_step(planner, monkeypatch):
+    """The shooting's fine flow begins the variational flow from each chord step after the
+    first: a plan from the atlas ends with that step, and integrates no other (none wasted, none
+    begun again after the shooting)."""
+    begun = []
+    start = planner._background.start
+    monkeypatch.setattr(planner._background, "start", lambda *args: begun.append(args) or start(*args))
+    for mode in ("normal", "anti-normal"):
+        for alpha in (5.0, 20.0, 40.0):
+            gait = planner.plan(GaitRequest(0.45, 0.45, np.radians(alpha), mode))
+            assert gait.found == "atlas" and gait.stability is not None
+            assert len(begun) == 1 and np.array_equal(begun[0][2], gait.step.qd_a)
+            begun.clear()
 
 
 def test_the_double_supports_solved_together_are_those_solved_one_by_one(planner, default_gait):

@@ -8,6 +8,13 @@ the impulses, and the compiled flow runs without Python's lock: started as soon 
 known, it is done, on a second core, by the time the impulse LP and the step figures are. The
 results are those of integrating it in line, to the bit (it is the same computation on a flow
 of its own).
+
+It begins earlier still: the shooting ends with the chord step on the fine grid that reaches the
+tolerance, as a rule the one after the coarse solution's; ``SpeculativeFlow``, the fine flow of
+one solve, begins the variational flow from each chord step's start after the first, so that it
+runs beside that step's own flow and is nearly done when the shooting returns. A step that turns
+out not to be the last wastes its variational flow (the next waits for it): the planner then
+still gets the right one, begun from the shooting's end.
 """
 
 from __future__ import annotations
@@ -43,3 +50,37 @@ class BackgroundVariationalFlow:
             done: Future[FlowResult] = Future()
             done.set_result(variational_flow(self.flow, period, q0, qd0))
             return done
+
+
+class SpeculativeFlow:
+    """The fine flow of one shooting solve (``bvp.solve_bvp``'s ``flow``): propagates as ``flow``
+    does, and begins the variational flow on ``background`` from the start of each chord step
+    after the first (a propagation with the nodes kept and no sensitivity: the shooting's fine
+    residual), the step most likely to be the shooting's last."""
+
+    def __init__(self, flow: BallisticFlow, background: BackgroundVariationalFlow) -> None:
+        self._flow, self._background = flow, background
+        self._chord_steps = 0
+        self._begun: tuple[float, bytes, bytes, Future[FlowResult]] | None = None
+
+    def __getattr__(self, name: str):  # the wrapped flow's grid and acceleration
+        return getattr(self._flow, name)
+
+    def propagate(self, q0: np.ndarray, qd0: np.ndarray, duration: float, seeds: np.ndarray | None = None,
+                  keep_nodes: bool = False) -> FlowResult:
+        """``BallisticFlow.propagate``; a chord step's also begins its variational flow."""
+        if seeds is None and keep_nodes:
+            self._chord_steps += 1
+            if self._chord_steps > 1:
+                q0, qd0 = np.array(q0, float), np.array(qd0, float)
+                self._begun = (duration, q0.tobytes(), qd0.tobytes(), self._background.start(duration, q0, qd0))
+        return self._flow.propagate(q0, qd0, duration, seeds, keep_nodes)
+
+    def variational_flow(self, period: float, q0: np.ndarray, qd0: np.ndarray) -> Future[FlowResult]:
+        """The variational flow from (q0 rad, qd0 rad/s) over ``period`` (s): the one begun at a
+        chord step from that very state (to the bit), else one begun now."""
+        if self._begun is not None:
+            duration, q, qd, future = self._begun
+            if duration == period and q == np.asarray(q0, float).tobytes() and qd == np.asarray(qd0, float).tobytes():
+                return future
+        return self._background.start(period, q0, qd0)

@@ -36,7 +36,7 @@ from ..model.params import BipedParams, load_params
 from .figures import StepFigures, energy_drift, step_figures
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
-from .monodromy import BackgroundVariationalFlow
+from .monodromy import BackgroundVariationalFlow, SpeculativeFlow
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
@@ -460,9 +460,10 @@ class GaitPlanner:
 
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
         """The gait of ``problem`` solved from ``guess`` (None: the straight-line start)."""
-        step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
+        shooting = SpeculativeFlow(self.flow, self._background)
+        step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
                          problem.mode, problem.closure, guess, self.settings, self.coarse_flow, problem.step_width)
-        flow = self._variational_flow(problem, step)
+        flow = self._variational_flow(problem, step, shooting)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
             ds = gait.double_support
@@ -470,10 +471,11 @@ class GaitPlanner:
                     abs(ds.foot_line_moment) <= self.settings.tolerance or \
                     abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
                 break  # nothing to match: the spin moments change nothing (or the closure already matches)
-            step = solve_bvp(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
+            shooting = SpeculativeFlow(self.flow, self._background)
+            step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
                              problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
                              problem.step_width, closure_target=-ds.foot_line_moment)
-            flow = self._variational_flow(problem, step)
+            flow = self._variational_flow(problem, step, shooting)
             gait = self.step_gait(problem, step, found)
         else:
             gait = self._unsettled(problem, step, found)
@@ -488,10 +490,12 @@ class GaitPlanner:
         return open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a, impulses.i_minus,
                          impulses.i_plus, flow.result())
 
-    def _variational_flow(self, problem: GaitProblem, step: BvpSolution) -> Future[FlowResult] | None:
-        """The step's full-state variational flow (for its multipliers), begun on the background
-        thread while the double support is solved; None if the step did not converge."""
-        return self._background.start(problem.period, step.q0, step.qd_a) if step.converged else None
+    def _variational_flow(self, problem: GaitProblem, step: BvpSolution,
+                          shooting: SpeculativeFlow) -> Future[FlowResult] | None:
+        """The step's full-state variational flow (for its multipliers) on the background thread,
+        begun at the shooting's last chord step (``shooting``) or now, while the double support
+        is solved; None if the step did not converge."""
+        return shooting.variational_flow(problem.period, step.q0, step.qd_a) if step.converged else None
 
     def _unsettled(self, problem: GaitProblem, step: BvpSolution, found: str,
                    next_qd_a: np.ndarray | None = None) -> Gait:
