@@ -1,7 +1,8 @@
 """Benchmark: the planner service's round trip from a client in another process, beside bare
 rclpy services measured in the same run (nodes of a few lines spun by ``spin_once`` loops: one
 answering std_srvs/Trigger, one answering PlanGait with the same response as the planner's, made
-once), one call of each in turn (and the bare services and the cached plans also each alone,
+once; and its twin, the same code in a second process: how far two alike processes differ), one
+call of each in turn, the order rotated each round (and the bare services and the cached plans also each alone,
 back to back): a cached request and uncached ones (each a different arm amplitude), with the
 planner recording and not, the whole plan and the plan without its trajectory's points
 (``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
@@ -42,15 +43,16 @@ from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 
 TRIGGER = "/bench_bare_trigger"
 BARE_PLAN = "/bench_bare_plan_gait"
+TWIN = "_twin"  # a second bare PlanGait process, the same code: how far two alike processes differ
 ALPHA = math.radians(23.5)
 
 
-def bare_server() -> None:
+def bare_server(suffix: str = "") -> None:
     """The yardsticks: a node with a Trigger service and a PlanGait service that answers every
     request with the planner's response to the cached request (made once, before serving),
-    spun by ``spin_once`` until killed."""
+    spun by ``spin_once`` until killed; their names end with ``suffix`` (a twin process's)."""
     rclpy.init()
-    node = rclpy.create_node("bench_bare_services")
+    node = rclpy.create_node("bench_bare_services" + suffix)
     planner = GaitPlanner()
     plan = plan_msg(planner.plan(GaitRequest(0.45, 0.45, ALPHA, "normal")), Header(), urdf_joints(planner.model))
     compact = without_trajectory(plan)
@@ -64,8 +66,8 @@ def bare_server() -> None:
         response.plan = compact if request.omit_trajectory else plan
         return response
 
-    node.create_service(Trigger, TRIGGER, trigger)
-    node.create_service(PlanGait, BARE_PLAN, plan_gait)
+    node.create_service(Trigger, TRIGGER + suffix, trigger)
+    node.create_service(PlanGait, BARE_PLAN + suffix, plan_gait)
     try:
         while rclpy.ok():
             rclpy.spin_once(node, timeout_sec=0.1)
@@ -84,10 +86,12 @@ def round_trip(side: ClientSide, client, request) -> float:
 
 def interleaved(side: ClientSide, targets: dict[str, tuple], calls: int) -> dict[str, list[float]]:
     """Round-trip times (s) of ``calls`` calls of each target (name -> (client, request)), one
-    of each in turn, so that a change of the machine's load falls on all alike."""
+    of each in turn, so that a change of the machine's load falls on all alike, the order
+    rotated each round (a call's place in the round moved its time by up to 15 % in a trial)."""
     times: dict[str, list[float]] = {name: [] for name in targets}
-    for _ in range(calls):
-        for name, (client, request) in targets.items():
+    order = list(targets.items())
+    for k in range(calls):
+        for name, (client, request) in order[k % len(order):] + order[:k % len(order)]:
             times[name].append(round_trip(side, client, request))
     return times
 
@@ -149,8 +153,11 @@ def main() -> None:
     alone: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
-        with open(where / "bare.log", "wb") as log:
-            bare_process = subprocess.Popen([sys.executable, __file__, "--bare-server"], stdout=log, stderr=log)
+        bare_processes = []
+        for suffix in ("", TWIN):
+            with open(where / f"bare{suffix}.log", "wb") as log:
+                bare_processes.append(subprocess.Popen([sys.executable, __file__, "--bare-server", suffix], stdout=log,
+                                                       stderr=log))
         planners = {record: start_entry("biped-gait-planner", ["-r", f"__node:=bench_planner_{record}", "-p",
                                                                f"record:={record}", "-p", f"record_dir:={where}/bags"],
                                         log=where / f"planner_{record}.log", cwd=where)
@@ -161,6 +168,8 @@ def main() -> None:
             bare_plan = side.node.create_client(PlanGait, BARE_PLAN)
             side.connect(bare)
             side.connect(bare_plan)
+            twin_plan = side.node.create_client(PlanGait, BARE_PLAN + TWIN)
+            side.connect(twin_plan)
             clients = {record: side.node.create_client(PlanGait, f"/bench_planner_{record}/plan_gait")
                        for record in planners}
             for client in clients.values():
@@ -168,6 +177,8 @@ def main() -> None:
             targets = {"bare Trigger service": (bare, Trigger.Request()),
                        "bare PlanGait service, same response": (bare_plan, cached),
                        "bare PlanGait service, no trajectory": (bare_plan, compact),
+                       "its twin in another process": (twin_plan, cached),
+                       "its twin, no trajectory": (twin_plan, compact),
                        "cached, recording on": (clients["true"], cached),
                        "cached, recording off": (clients["false"], cached),
                        "cached, no trajectory, recording on": (clients["true"], compact),
@@ -190,8 +201,9 @@ def main() -> None:
             side.close()
             for proc in planners.values():
                 stop_process(proc)
-            bare_process.terminate()
-            bare_process.wait()
+            for proc in bare_processes:
+                proc.terminate()
+                proc.wait()
     solves = []
     planner = GaitPlanner()
     for k in range(20):
@@ -226,7 +238,7 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--bare-server"]:
-        bare_server()
+    if sys.argv[1:2] == ["--bare-server"]:
+        bare_server(*sys.argv[2:])
     else:
         main()
