@@ -6,7 +6,8 @@ call of each in turn, the order rotated each round (and the bare services and th
 back to back): a cached request and uncached ones (each a different arm amplitude), with the
 planner recording and not, the whole plan and the plan without its trajectory's points
 (``omit_trajectory``, 1.3 kB instead of 26 kB), median and p99 over ``--calls`` calls each
-(``--uncached-calls`` for the uncached). The first request of ``--fresh`` freshly started
+(``--uncached-calls`` for the uncached); then the same cached calls with the recording planner
+stopped (its recording shares the two cores with the other servers). The first request of ``--fresh`` freshly started
 planners (uncached, sent as soon as the service is found and has refused a bad request) beside their next uncached ones. Also
 the client's and the server's share of the plan's size: one PlanGait response serialized and
 deserialized by rclpy in this process, and the direct core call. Run:
@@ -151,6 +152,7 @@ def main() -> None:
     compact = plan_request(step_length=0.45, period=0.45, arm_amplitude=ALPHA, omit_trajectory=True)
     results: dict[str, list[float]] = {}
     alone: dict[str, list[float]] = {}
+    quieter: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         where = Path(tmp)
         bare_processes = []
@@ -194,6 +196,11 @@ def main() -> None:
                     name = f"uncached, recording {'on' if record == 'true' else 'off'}"
                     results.setdefault(name, []).append(round_trip(
                         side, clients[record], plan_request(step_length=0.45, period=0.45, arm_amplitude=alpha)))
+            stop_process(planners["true"])  # the recording planner's work shares the two cores with the others
+            fewer = {name: targets[name] for name in ("bare PlanGait service, same response", "its twin in another process",
+                                                      "cached, recording off", "bare PlanGait service, no trajectory",
+                                                      "its twin, no trajectory", "cached, no trajectory, recording off")}
+            quieter = interleaved(side, fewer, args.calls)
             for proc in planners.values():
                 stop_process(proc)
             first, after = first_requests(side, where, args.fresh)
@@ -218,13 +225,17 @@ def main() -> None:
 
     def ratios(times: dict[str, list[float]], name: str) -> str:
         floor = floors["no trajectory" if "no trajectory" in name else ""]
-        trigger = statistics.median(times["bare Trigger service"]) if "bare Trigger service" in times else math.nan
-        return (f"{statistics.median(times[name]) / statistics.median(times[floor]):5.2f} x the bare PlanGait, "
-                f"{statistics.median(times[name]) / trigger:5.2f} x the bare Trigger")
+        ratio = f"{statistics.median(times[name]) / statistics.median(times[floor]):5.2f} x the bare PlanGait"
+        if "bare Trigger service" not in times:
+            return ratio
+        return f"{ratio}, {statistics.median(times[name]) / statistics.median(times['bare Trigger service']):5.2f} x the bare Trigger"
 
     print("planner service round trip from another process (Fast DDS, localhost), beside bare services:")
     for name, times in results.items():
         print(f"  {name:38s} {summary(times)}  ({ratios(results, name)})")
+    print("the recording planner stopped (its recording shares the two cores with the other servers):")
+    for name, times in quieter.items():
+        print(f"  {name:38s} {summary(times)}  ({ratios(quieter, name)})")
     print("each alone, back to back (each server busy with one client, no other call between):")
     for name, times in alone.items():
         print(f"  {name:38s} {summary(times)}  ({ratios(alone, name)})")
