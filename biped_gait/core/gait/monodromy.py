@@ -71,9 +71,8 @@ class SpeculativeFlow:
         """``BallisticFlow.propagate``; a chord step's also begins its variational flow."""
         if seeds is None and keep_nodes:
             self._chord_steps += 1
-            if self._chord_steps > 1:
-                q0, qd0 = np.array(q0, float), np.array(qd0, float)
-                self._begun = (duration, q0.tobytes(), qd0.tobytes(), self._background.start(duration, q0, qd0))
+            if self._chord_steps > 1:  # the background flow copies the state it is given
+                self._begun = (duration, _bits(q0), _bits(qd0), self._background.start(duration, q0, qd0))
         return self._flow.propagate(q0, qd0, duration, seeds, keep_nodes)
 
     def variational_flow(self, period: float, q0: np.ndarray, qd0: np.ndarray) -> Future[FlowResult]:
@@ -81,6 +80,11 @@ class SpeculativeFlow:
         chord step from that very state (to the bit), else one begun now."""
         if self._begun is not None:
             duration, q, qd, future = self._begun
-            if duration == period and q == np.asarray(q0, float).tobytes() and qd == np.asarray(qd0, float).tobytes():
+            if duration == period and q == _bits(q0) and qd == _bits(qd0):
                 return future
         return self._background.start(period, q0, qd0)
+
+
+def _bits(state: np.ndarray) -> bytes:
+    """A state's float64 bytes: two states are the same to the bit when these are."""
+    return np.asarray(state, float).tobytes()
