@@ -217,10 +217,14 @@ def test_recording_holds_every_call_and_plan(tmp_path, stop_signal):
     plans = by_topic[topic]
     assert [p.arm_amplitude for p in plans] == [0.3, 0.32]  # the cached answer is not published again
     assert plans[1].effort == "l2" and len(plans[1].trajectory.points) == 91
+    # The node's health is recorded beside them, on its clock
+    health = by_topic.get("/diagnostics", [])
+    assert all(s.name == f"{name}: planning" for h in health for s in h.status)
     # The rosbag2 directory opens too, and the mcap-ros2-support decoder agrees.
     with AnyReader([bag_dir]) as reader:
-        assert {c.topic: c.msgcount for c in reader.connections} == {service + "/calls": 4, topic: 2}
-    decoded = [m for m in read_ros2_messages(str(mcap_path))]
+        assert {c.topic: c.msgcount for c in reader.connections} == {service + "/calls": 4, topic: 2,
+                                                                     "/diagnostics": len(health)}
+    decoded = [m for m in read_ros2_messages(str(mcap_path)) if m.channel.topic != "/diagnostics"]
     assert len(decoded) == 6
     assert [m.ros_msg.sequence for m in decoded if m.channel.topic.endswith("/calls")] == [1, 2, 3, 4]
 

@@ -5,11 +5,12 @@
   amplitude of least effort, with feedback per amplitude evaluated; cancelable;
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
   transient-local, depth 1, so a late subscriber gets the latest one;
-- recording (parameter ``record``): every request with its response (PlanGaitCall messages on
-  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``, by a writer
-  thread: an exchange is queued as it is answered and serialized and written off the request path;
 - ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, every second): requests, solves and their
-  times, cache hits, refusals, optimizations, the recording.
+  times, cache hits, refusals, optimizations, the recording;
+- recording (parameter ``record``): every request with its response (PlanGaitCall messages on
+  ``~/plan_gait/calls``), every published plan and ``/diagnostics``, to MCAP under
+  ``record_dir``, by a writer thread: an exchange is queued as it is answered and serialized and
+  written off the request path.
 
 A thin node: requests and goals carry the gait vocabulary (``biped_gait.gait_options``: the
 same fields, units and meanings as the command line's options), converted and handed to the
@@ -42,6 +43,7 @@ import rclpy.logging  # after a signal, a logger of no node: rosout is gone with
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.qos import QoSProfile
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory
@@ -59,6 +61,7 @@ from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import OPTION_NAMES, POINT_NAMES, gait_fields, plan_msg, request_key, stride_msgs, urdf_joints
 from .diagnostics import OK, WARN, Counters, Diagnostics, Report
+from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
@@ -81,8 +84,8 @@ PARAMETERS = (
           dynamic=True),
     Param("queue_depth", 1000, "requests each service and the action keep waiting (count): a burst beyond "
           "this is dropped by the middleware", 10, 100000),
-    Param("record", True, "record requests, responses and plans to MCAP (true/false; at run time: false finishes "
-          "the recording, true starts a new one)", dynamic=True),
+    Param("record", True, "record requests, responses, plans and /diagnostics to MCAP (true/false; at run time: "
+          "false finishes the recording, true starts a new one)", dynamic=True),
     Param("record_dir", "bags", "directory of the recordings (path)"),
 )
 
@@ -156,7 +159,8 @@ class GaitPlannerNode(Node):
         self._record_dir = value["record_dir"]
         self.plan_publisher = RecordedPublisher(self, GaitPlan, "~/gait_plan", LATCHED, None)
         self.call_recorder = RecordedPublisher(self, PlanGaitCall, "~/plan_gait/calls", EVENTS, None, publish=False)
-        self._recordings = [self.plan_publisher, self.call_recorder]
+        health = RecordedPublisher(self, DiagnosticArray, DIAGNOSTICS_TOPIC, DIAGNOSTICS_QOS, None)
+        self._recordings = [self.plan_publisher, self.call_recorder, health]
         self._prepared = {group: threading.Event() for group in GROUPS}
         threading.Thread(target=self._prepare, name="prepare_planners", daemon=True).start()
         if value["record"]:
@@ -187,7 +191,7 @@ class GaitPlannerNode(Node):
             result_service_qos_profile=queue,
             cancel_service_qos_profile=queue,
         )
-        self.diagnostics = Diagnostics(self, {"planning": self._report})
+        self.diagnostics = Diagnostics(self, {"planning": self._report}, health)
 
     # Run-time parameters and recording ------------------------------------------------------
     def _on_parameter(self, name: str, value: object) -> None:
