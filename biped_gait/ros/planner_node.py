@@ -52,7 +52,7 @@ from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
-from ..core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_param_names
 from ..core.gait.planner import SEED, GaitPlanner, GaitRequest
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.text import clip
@@ -74,7 +74,8 @@ CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes
 GROUPS = ("service", "action")  # who owns a planner: the service's callbacks, the action's
 PARAMETERS = (
     Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
-          f"{', '.join(shipped_param_names())} or the path of a YAML file"),
+          f"{', '.join(shipped_param_names())} or the path of a YAML file (which requests may name by its path or "
+          "by the name inside it)"),
     Param("bvp_tolerance", DEFAULTS.tolerance, "bound on the BVP end-point residual (rad) and closure gap "
           "(kg m^2/s)", 1e-14, 1e-6),
     Param("max_iterations", DEFAULTS.max_iterations, "Newton iterations allowed per solve (count)", 1, 200),
@@ -146,7 +147,7 @@ class GaitPlannerNode(Node):
         self._recordings: list[RecordedPublisher] = []
         value = declare(self, PARAMETERS, self._on_parameter)
         self._default_params = value["default_params"]
-        load_params(self._default_params)  # refuse to start on a bad default, with its message
+        self._default_set = load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
         self._cache_size = value["cache_size"]
         self._sequence = 0
@@ -252,6 +253,15 @@ class GaitPlannerNode(Node):
             finally:
                 self._prepared[group].set()
 
+    def _fields(self, msg, names: tuple[str, ...]) -> dict[str, object]:
+        """The ``GaitRequest`` fields ``names`` of a request or goal, its ``params`` the default
+        set's as given (``default_params``) whenever it names that set: empty, by its name or by
+        its file's path (``names_set``), so that one set is one planner and one cache entry."""
+        fields = gait_fields(msg, self._default_params, names)
+        if names_set(fields["params"], self._default_set, self._default_params):
+            fields["params"] = self._default_params
+        return fields
+
     def _planner(self, params: str, group: str) -> GaitPlanner:
         """The planner of ``group`` for parameter set ``params`` (the default set's made at
         start-up, ``_prepare``: waited for; any other on first use)."""
@@ -292,7 +302,7 @@ class GaitPlannerNode(Node):
         """Answer from the cache (the first answer's success and message, marked cached), else
         plan: ``success`` only for an admissible gait; otherwise the reasons (a gait that misses
         only the margins says so) and, when the atlas knows, where the nearest admissible gaits are."""
-        fields = gait_fields(request, self._default_params, (*POINT_NAMES, *OPTION_NAMES))
+        fields = self._fields(request, (*POINT_NAMES, *OPTION_NAMES))
         key = request_key(fields)
         cached = self._cached(self._cache, key)
         if cached is not None:
@@ -381,7 +391,7 @@ class GaitPlannerNode(Node):
         goal = goal_handle.request
         self.stats.count("optimizations")
         try:
-            fields = gait_fields(goal, self._default_params, (*GOAL_NAMES, *OPTION_NAMES))
+            fields = self._fields(goal, (*GOAL_NAMES, *OPTION_NAMES))
         except ValueError as exc:
             return self._refuse_goal(goal_handle, OptimizeArmSwing.Result(message=clip(str(exc))))
         key = request_key(fields)

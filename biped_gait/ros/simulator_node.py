@@ -85,7 +85,7 @@ from ..core.gait.configurations import GaitMode
 from ..core.gait.planner import GaitRequest, validate_request
 from ..gait_options import OPTIONS, POINT, GaitOption
 from ..core.walking.pacing import Pacer
-from ..core.model.params import load_params, shipped_param_names
+from ..core.model.params import load_params, names_set, shipped_param_names
 from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
 from ..core.walking.start_stop import why_not
@@ -213,7 +213,7 @@ class SimulatorNode(Node):
         self.rtf = value["real_time_factor"]
         self.steps = value["steps"]
         self._own_params = value["params"]
-        self._own_params_name = load_params(self._own_params).name if self._own_params else ""
+        self._own_set = load_params(self._own_params) if self._own_params else None
         self._group = ReentrantCallbackGroup()
         self._latest_plan: GaitPlan | None = None
         self._plan_ready = threading.Event()
@@ -410,7 +410,7 @@ class SimulatorNode(Node):
         """The parameter set to walk a plan with, from the plan's ``params`` field: a shipped
         set, or this node's own ``params`` file (named by its path or by the name inside it),
         never another path from the wire; ``NoPlan`` otherwise. '' is the default set."""
-        if self._own_params and name in (self._own_params, self._own_params_name):
+        if self._own_set is not None and name and names_set(name, self._own_set, self._own_params):
             return self._own_params
         if name == "" or name in shipped_param_names():
             return name
