@@ -284,7 +284,8 @@ class GaitPlanner:
         path: list[tuple[float, StrideGuess]] = []
         if stride is None and guess is not None:
             stride = self._stride(problem, guess, "guess", stability)
-            if guess_curvature is not None and not (stride.converged and _stride_near(stride, guess)):
+            resumable = guess_curvature is not None and guess_curvature != point[3]  # a continuation has a span
+            if resumable and not (stride.converged and _stride_near(stride, guess)):
                 resumed = self._curvature_path(problem, start=(guess_curvature, guess))[-1][1]
                 stride = self._stride(problem, resumed, "continuation", stability)
         elif stride is None or not stride.admissible:

@@ -449,11 +449,11 @@ class Walker:
         impact = self.hybrid.impact(q_td)
         planned = impact.problem(qd_td, self.qd_a)
         reachable, miss = planned.reachable()
-        for _ in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
+        for again in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
             if self.reaim:
                 try:
                     qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b,
-                                          foot_line_moment)
+                                          foot_line_moment, again > 0)
                 except Fall as exc:
                     momentum = float(impact.momentum_row @ planned.xd_b)
                     planned_momentum = float(self.hybrid.impact(ending[0]).momentum_row @ bm.embed(ending[1]))
@@ -512,12 +512,14 @@ class Walker:
                 return f"the impulses would need joint rates above the bound of {options.rate_bound:g} rad/s"
         return "no impulses reach the aimed velocity with the feet pushing on the ground (unilateral contact)"
 
-    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, foot_line_moment: float) -> np.ndarray:
+    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, foot_line_moment: float,
+               again: bool = False) -> np.ndarray:
         """The next step's initial velocity (its own coordinates, rad/s), and its duration
         (``next_period``, s): the flow from ``q_start`` reaches the planned touchdown
         configuration q_T exactly, and the velocity is reachable through this double support
         (the momentum about the feet line is kept, up to the ``foot_line_moment`` (kg m^2/s) the
-        ground's spin moments change).
+        ground's spin moments change); ``again``: the same touchdown as the last re-aim, with
+        another ``foot_line_moment`` (a closure round).
 
         Chord steps with the planned orbit's Jacobian: off the orbit by a numerical error
         only, they converge to rounding level in one or two steps. With momentum steering, the
@@ -526,7 +528,8 @@ class Walker:
         if self.steering is not None:
             try:
                 q_pre = self.hybrid.exchange.configuration(q_start)  # the exchange is an involution
-                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period, foot_line_moment)
+                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period, foot_line_moment,
+                                                             again)
             except SteeringFailed as exc:
                 raise Fall(str(exc)) from None
             return v
