@@ -24,6 +24,8 @@ VELOCITY_ENVELOPE = "~/velocity_envelope"  # the simulator's: the commands it wa
 CLOCK = "/clock"  # published, not recorded (ros/sim_clock.py)
 ITERATIONS = "~/iterations"  # the simulator's step counter (latched)
 
+RECORD_DIR = "bags"  # the nodes' default record_dir
+
 GAIT_PLAN_TYPE = "biped_gait_interfaces/msg/GaitPlan"
 PLAN_CALL_TYPE = "biped_gait_interfaces/msg/PlanGaitCall"
 TF_TYPE = "tf2_msgs/msg/TFMessage"

@@ -56,6 +56,7 @@ from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_
 from ..core.gait.planner import SEED, GaitPlanner, GaitRequest
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.text import clip
+from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
@@ -87,7 +88,7 @@ PARAMETERS = (
           "this is dropped by the middleware", 10, 100000),
     Param("record", True, "record requests, responses, plans and /diagnostics to MCAP (true/false; at run time: "
           "false finishes the recording, true starts a new one)", dynamic=True),
-    Param("record_dir", "bags", "directory of the recordings (path)"),
+    Param("record_dir", topics.RECORD_DIR, "directory of the recordings (path)"),
 )
 
 

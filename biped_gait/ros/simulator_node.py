@@ -169,7 +169,7 @@ PARAMETERS = (
           0.001, 2.0),
     Param("record", True, "record everything published but /clock to MCAP (true/false; at run time: false "
           "finishes the recording, true starts a new one, the latched topics first)", dynamic=True),
-    Param("record_dir", "bags", "directory of the recordings (path)"),
+    Param("record_dir", topics.RECORD_DIR, "directory of the recordings (path)"),
     Param("chunk_size", DEFAULT_CHUNK_SIZE, "MCAP chunk size (bytes): at most this much is lost if the process is "
           "killed", 1024, 64 * 1024 * 1024),
     Param("exit_when_done", False, "end the process when the walk ends (true/false; the launcher sets it)"),

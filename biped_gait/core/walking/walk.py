@@ -497,15 +497,17 @@ class Walker:
 
     def _why_no_impulses(self, problem) -> str:
         """The physical reason a double support has no impulses: the friction cone (the impulses
-        exist without it, needing the friction they need), the joint-rate bound, or none
-        reaches the aimed velocity with the feet pushing on the ground."""
+        exist without it, needing the friction they need: a finite coefficient, or none at all when
+        a foot would need a horizontal impulse with no vertical one), the joint-rate bound, or
+        none reaches the aimed velocity with the feet pushing on the ground."""
         options = self.orbit.options
         if math.isfinite(options.friction):
             free = solve_impulses(problem, self.orbit.effort, replace(options, friction=math.inf))
             if free.success:
                 needed = float(friction_ratios(free).max())
                 if not math.isfinite(needed):
-                    return "without the friction cone a foot's vertical reaction impulse is not positive (the ground would pull)"
+                    return (f"the impulses would need a foot to take a horizontal reaction impulse with no vertical one: "
+                            f"no friction coefficient suffices (the ground's is {options.friction:g})")
                 return f"the impulses would need a friction coefficient of {needed:.2f}, more than the ground's {options.friction:g}"
         if math.isfinite(options.rate_bound):
             if solve_impulses(problem, self.orbit.effort, replace(options, rate_bound=math.inf)).success:
