@@ -12,6 +12,7 @@ pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not 
 
 import math
 import re
+from collections.abc import Callable
 
 import numpy as np
 from geometry_msgs.msg import Twist, Vector3
@@ -42,6 +43,19 @@ def yaw(orientation) -> float:
     """The heading (rad) of a quaternion (a rotation about the vertical and small tilts)."""
     q = orientation
     return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+def turns(where) -> tuple[list[float], Callable[[float], float]]:
+    """The recorded walk under ``where``: its touchdown instants (s) and its heading (rad, unwrapped)
+    at a time, from /odom."""
+    [bag] = list((where / "bags").iterdir())
+    topics = read_bag(bag)
+    odom = [m for _, m in topics["/odom"]]
+    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odom])
+    headings = np.unwrap([yaw(m.pose.pose.orientation) for m in odom])
+    touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
+    return ([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in touchdowns],
+            lambda t: float(headings[np.argmin(np.abs(stamps - t))]))
 
 
 def test_a_circle_from_turn_radius_closes_on_its_start(planner_node, tmp_path):
@@ -104,17 +118,7 @@ def test_cmd_vel_angular_z_turns_the_walk_at_the_commanded_rate(planner_node, tm
     log = (tmp_path / "biped-gait-simulator.log").read_text()
     assert "is outside the envelope" in log and "clamped to 1.000 m/s, 0.500 rad/s" in log
     assert not [e for e in events if e.kind == GaitEvent.FALL]
-    [bag] = list((tmp_path / "bags").iterdir())
-    topics = read_bag(bag)
-    odom = [m for _, m in topics["/odom"]]
-    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odom])
-    headings = np.unwrap([yaw(m.pose.pose.orientation) for m in odom])
-    touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
-    times = [m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in touchdowns]
-
-    def heading_at(t: float) -> float:
-        return float(headings[np.argmin(np.abs(stamps - t))])
-
+    times, heading_at = turns(tmp_path)
     rates = [(heading_at(b) - heading_at(a)) / (b - a) for a, b in zip(times, times[1:])]
     print("\nyaw rate per step from /odom (rad/s): " + " ".join(f"{r:.3f}" for r in rates))
     # The curvature ramps 0.1 1/m per step from the first step: at 0.5 1/m from the fifth
@@ -147,21 +151,11 @@ def test_the_tutorials_turn_under_the_default_speed_rule(planner_node, tmp_path)
     assert proc.returncode == 0, log
     assert "speed command: least effort per metre" in log and "no transition" not in log, log
     rtf = float(re.search(r"real-time factor ([\d.]+)\)", log).group(1))
-    [bag] = list((tmp_path / "bags").iterdir())
-    topics = read_bag(bag)
-    odom = [m for _, m in topics["/odom"]]
-    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odom])
-    headings = np.unwrap([yaw(m.pose.pose.orientation) for m in odom])
-    touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
-    times = [m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in touchdowns]
-
-    def heading_at(t: float) -> float:
-        return float(headings[np.argmin(np.abs(stamps - t))])
-
+    times, heading_at = turns(tmp_path)
     rates = [(heading_at(b) - heading_at(a)) / (b - a) for a, b in zip(times, times[1:])]
     print(f"\nyaw rate per step from /odom (rad/s): {' '.join(f'{r:.3f}' for r in rates)}; the walk's real-time "
           f"factor {rtf:.2f} (paced at 1)")
-    assert len(touchdowns) == 14
+    assert len(times) == 14
     steady = (heading_at(times[13]) - heading_at(times[7])) / (times[13] - times[7])  # three strides at 0.4 1/m
     assert steady == pytest.approx(0.4, rel=0.02)
     assert all(r <= 0.4 * 1.15 for r in rates[:4])  # no faster than the ramp allows
