@@ -449,11 +449,11 @@ class Walker:
         impact = self.hybrid.impact(q_td)
         planned = impact.problem(qd_td, self.qd_a)
         reachable, miss = planned.reachable()
-        for _ in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
+        for again in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
             if self.reaim:
                 try:
                     qd_next = self._reaim(self.hybrid.exchange.configuration(q_td), impact, planned.xd_b,
-                                          foot_line_moment)
+                                          foot_line_moment, again > 0)
                 except Fall as exc:
                     momentum = float(impact.momentum_row @ planned.xd_b)
                     planned_momentum = float(self.hybrid.impact(ending[0]).momentum_row @ bm.embed(ending[1]))
@@ -497,27 +497,31 @@ class Walker:
 
     def _why_no_impulses(self, problem) -> str:
         """The physical reason a double support has no impulses: the friction cone (the impulses
-        exist without it, needing the friction they need), the joint-rate bound, or none
-        reaches the aimed velocity with the feet pushing on the ground."""
+        exist without it, needing the friction they need: a finite coefficient, or none at all when
+        a foot would need a horizontal impulse with no vertical one), the joint-rate bound, or
+        none reaches the aimed velocity with the feet pushing on the ground."""
         options = self.orbit.options
         if math.isfinite(options.friction):
             free = solve_impulses(problem, self.orbit.effort, replace(options, friction=math.inf))
             if free.success:
                 needed = float(friction_ratios(free).max())
                 if not math.isfinite(needed):
-                    return "without the friction cone a foot's vertical reaction impulse is not positive (the ground would pull)"
+                    return (f"the impulses would need a foot to take a horizontal reaction impulse with no vertical one: "
+                            f"no friction coefficient suffices (the ground's is {options.friction:g})")
                 return f"the impulses would need a friction coefficient of {needed:.2f}, more than the ground's {options.friction:g}"
         if math.isfinite(options.rate_bound):
             if solve_impulses(problem, self.orbit.effort, replace(options, rate_bound=math.inf)).success:
                 return f"the impulses would need joint rates above the bound of {options.rate_bound:g} rad/s"
         return "no impulses reach the aimed velocity with the feet pushing on the ground (unilateral contact)"
 
-    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, foot_line_moment: float) -> np.ndarray:
+    def _reaim(self, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, foot_line_moment: float,
+               again: bool = False) -> np.ndarray:
         """The next step's initial velocity (its own coordinates, rad/s), and its duration
         (``next_period``, s): the flow from ``q_start`` reaches the planned touchdown
         configuration q_T exactly, and the velocity is reachable through this double support
         (the momentum about the feet line is kept, up to the ``foot_line_moment`` (kg m^2/s) the
-        ground's spin moments change).
+        ground's spin moments change); ``again``: the same touchdown as the last re-aim, with
+        another ``foot_line_moment`` (a closure round).
 
         Chord steps with the planned orbit's Jacobian: off the orbit by a numerical error
         only, they converge to rounding level in one or two steps. With momentum steering, the
@@ -526,7 +530,8 @@ class Walker:
         if self.steering is not None:
             try:
                 q_pre = self.hybrid.exchange.configuration(q_start)  # the exchange is an involution
-                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period, foot_line_moment)
+                v, self.next_period, _ = self.steering.solve(q_pre, impact, xd_b, self.next_period, foot_line_moment,
+                                                             again)
             except SteeringFailed as exc:
                 raise Fall(str(exc)) from None
             return v
