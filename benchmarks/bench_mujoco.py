@@ -25,7 +25,9 @@ os.environ.setdefault("ROS_DOMAIN_ID", "93")
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.core.walking.mujoco_engine import MujocoEngine  # noqa: E402
 from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
-from biped_gait.core.walking.walk import Finished, PlannedOrbit, Walk  # noqa: E402
+from biped_gait.core.walking.events import Finished  # noqa: E402
+from biped_gait.core.walking.orbit import PlannedOrbit  # noqa: E402
+from biped_gait.core.walking.walk import Walk  # noqa: E402
 from harness import RATE, Timed, median_range, simulator_factor  # noqa: E402
 
 PULSE = 0.005

@@ -58,7 +58,9 @@ def plan_texts(params: str) -> list[str]:
 def walk_arrays() -> dict[str, np.ndarray]:
     """20 steps of the default gait walked with momentum steering at 200 samples per second."""
     from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-    from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Touchdown, Walk
+    from biped_gait.core.walking.events import StepSamples, Touchdown
+    from biped_gait.core.walking.orbit import PlannedOrbit
+    from biped_gait.core.walking.walk import Walk
 
     gait = GaitPlanner().plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal"))
     walk = Walk(PlannedOrbit.of(gait), rate=200.0, steps=20, momentum_rate=0.25)

@@ -11,7 +11,10 @@ import pytest
 
 from biped_gait.core.walking.push import AppliedPush, Push
 from biped_gait.core.walking.steering import DEFAULT_RATE
-from biped_gait.core.walking.walk import Finished, PlannedOrbit, StepSamples, Touchdown, Walk, Walker
+from biped_gait.core.walking.events import Finished, StepSamples, Touchdown
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 pytestmark = pytest.mark.core
 

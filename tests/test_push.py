@@ -16,7 +16,10 @@ from biped_gait.core.model.biped import cross
 from biped_gait.core.walking.push import DIRECTIONS, Push, TrunkPush, horizontal_impulse
 from biped_gait.core.gait.stability import closed_loop
 from biped_gait.core.walking.steering import DEFAULT_RATE, momentum_row, pelvis_pitch, reference
-from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker
+from biped_gait.core.walking.events import StepSamples
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 pytestmark = pytest.mark.core
 

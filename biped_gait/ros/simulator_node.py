@@ -90,8 +90,10 @@ from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
-from ..core.walking.walk import (ENGINES, PULSE_DURATION, CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples,
-                                 Touchdown, Walk, prepare_walking)
+from ..core.walking.events import CouldNotStart, Fell, Finished, StepSamples, Touchdown
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import prepare_walking
+from ..core.walking.walk import ENGINES, PULSE_DURATION, Walk
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess

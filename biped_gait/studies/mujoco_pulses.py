@@ -28,7 +28,10 @@ import numpy as np
 from ..core.gait.planner import GaitRequest
 from ..core.model.params import load_params
 from ..core.walking.steering import DEFAULT_RATE
-from ..core.walking.walk import Fell, Finished, PlannedOrbit, Walk, Walker
+from ..core.walking.events import Fell, Finished
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
+from ..core.walking.walk import Walk
 from .executors import planner_for
 
 STEPS = 20
