@@ -32,7 +32,8 @@ slowest gait.
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: ``engine``
 ``hybrid`` (the planner's model) or ``mujoco`` (MuJoCo, the double support as torque pulses of
-``pulse_duration``; ``core/walking/mujoco_engine.py``): the same topics, events and recording.
+``pulse_duration``; ``core/walking/engines/mujoco.py``, ``core/walking/phases/pulses.py``): the same
+topics, events and recording.
 Speed and turn: ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in
 rad/s), walked with transition steps within the envelope published on ``~/velocity_envelope``
 (biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
@@ -602,7 +603,7 @@ class SimulatorNode(Node):
                         return False
                     publish_clock(clock[k])
                     if k == 0:
-                        self.phases.sample(first.step, first.stance_side, first.t, base_ns)
+                        self.phases.sample(first.step, first.stance_side, first.phase, first.t, base_ns)
                     for send, data in outputs:
                         send(data[k], stamp)
                     if live is not None:
