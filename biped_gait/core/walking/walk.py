@@ -24,6 +24,7 @@ from .orbit import Cycle, PlannedOrbit, as_cycle
 from .phases.pulses import Coast, Pulses
 from .push import AppliedPush
 from .runner import Walker
+from .state import WalkState
 from .world import WorldView
 
 ENGINES = ("hybrid", "mujoco")
@@ -92,39 +93,42 @@ class Walk:
                 yield item
 
     def batches(self) -> Iterator[StepSamples | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
-        """As iterating, but the samples of a step's phase come at once, as a ``StepSamples``
-        (arrays); a push splits them: the samples before it, the push, the samples after."""
+        """As iterating, but the samples of each phase come at once, as a ``StepSamples`` (arrays); a
+        push within a phase splits them: the samples before it, the push, the samples after."""
         if self.walker is None:
             yield CouldNotStart(self.problem)
             return
-        walker, world = self.walker, self.world
+        walker, prepared, last = self.walker, None, 0.0
         while self.steps == 0 or walker.state.step < self.steps:
-            if self.before_step is not None:
+            if self.before_step is not None and walker.state.step != prepared:  # a step begins
+                prepared = walker.state.step
                 self.before_step(walker)
             s = walker.state
-            outcome = walker.walk_step()
-            samples = outcome.samples
-            if samples:
-                pictures = world.pictures(np.array([x.q for x in samples]), np.array([x.qd for x in samples]),
-                                          s.stance_side, s.stance_foot, s.heading)
-                times = np.array([x.t for x in samples])
-                # Cuts: before the first sample at or after each push (which comes there), and where the phase's kind changes.
-                cuts = [(int(np.searchsorted(times, push.t, side="left")), push) for push in outcome.pushes]
-                cuts += [(k, None) for k in range(1, len(samples)) if samples[k].phase != samples[k - 1].phase]
-                start = 0
-                for end, push in sorted(cuts, key=lambda cut: cut[0]):
-                    if end > start:
-                        yield StepSamples(samples[start:end], pictures.rows(start, end))
-                    if push is not None:
-                        yield push
-                    start = max(start, end)
-                if start < len(times):
-                    yield StepSamples(samples[start:], pictures.rows(start, len(times)))
-            else:
-                yield from outcome.pushes
-            if outcome.touchdown is None:
-                t = samples[-1].t if samples else s.t
-                yield Fell(s.step, t, t - s.t, s.stance_side, outcome.fall)
+            run = walker.run_phase()
+            yield from self._split(run.samples, run.pushes, s)
+            last = run.samples[-1].t if run.samples else max(last, s.t)
+            if run.fall:
+                yield Fell(s.step, last, last - s.t, s.stance_side, run.fall)
                 return
-            yield outcome.touchdown
+            yield from run.events
         yield Finished(walker.state.step, walker.state.t, walker.state.stance_side)
+
+    def _split(self, samples: list[Sample], pushes: tuple[AppliedPush, ...],
+               s: WalkState) -> Iterator[StepSamples | AppliedPush]:
+        """The samples of a phase that began in ``s``, with the robot in world terms, cut before the
+        first sample at or after each push, which comes there."""
+        if not samples:
+            yield from pushes
+            return
+        pictures = self.world.pictures(np.array([x.q for x in samples]), np.array([x.qd for x in samples]),
+                                       s.stance_side, s.stance_foot, s.heading)
+        times = np.array([x.t for x in samples])
+        start = 0
+        for push in pushes:
+            end = int(np.searchsorted(times, push.t, side="left"))
+            if end > start:
+                yield StepSamples(samples[start:end], pictures.rows(start, end))
+            yield push
+            start = max(start, end)
+        if start < len(times):
+            yield StepSamples(samples[start:], pictures.rows(start, len(times)))
