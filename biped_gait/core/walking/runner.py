@@ -183,8 +183,9 @@ class Walker:
                 segment = engine.advance(ws, motion, t_stop, guard.touchdown_after)
                 segments.append(segment)
                 t_end = segment.t
-                # The instants k / rate of the walk in the step up to its end; an instant at an
-                # event (a touchdown) opens the next phase.
+                # The instants k / rate of the walk in the step up to its end: an instant at a
+                # touchdown opens the next phase (the state after the impact), one at another end
+                # of a phase (the state continuous) closes this one.
                 while (tau := (self.sample_index + len(taus)) / self.rate - s.t) < t_end - TIME_TOLERANCE or (
                     not segment.touchdown and tau <= t_end
                 ):

@@ -102,8 +102,8 @@ class Phase:
         raise NotImplementedError
 
     def guard(self, ctx: WalkContext, state: WalkState) -> Guard:
-        """What ends the phase started in ``state``."""
-        return Guard()
+        """What ends the phase started in ``state`` (a phase with motion)."""
+        raise NotImplementedError
 
     def reset(self, ctx: WalkContext, state: WalkState, end: End) -> Transition:
         """The transition out of the phase, which started in ``state`` and ended as ``end``;
