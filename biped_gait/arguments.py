@@ -9,7 +9,7 @@ import math
 import tempfile
 from pathlib import Path
 
-from .gait_options import ALPHA_RANGE_DEG, OPTION_BY_NAME, OPTIONS, POINT, GaitOption
+from .gait_options import ALPHA_RANGE_DEG, OPTION_BY_NAME, OPTIONS, POINT, GaitOption, resolve_unset
 
 STDOUT = "-"  # --json - writes to standard output
 ONE, MANY, RANGE = "one", "many", "range"  # how a verb takes an axis of the point
@@ -121,8 +121,9 @@ def add_json(parser: argparse.ArgumentParser, what: str) -> None:
 
 
 def request_fields(args: argparse.Namespace, exclude: tuple[str, ...] = ("mode",)) -> dict[str, object]:
-    """The ``GaitRequest`` fields of the gait options given (request units), less ``exclude``."""
-    return {o.name: o.from_cli(getattr(args, o.name)) for o in OPTIONS if o.name not in exclude}
+    """The ``GaitRequest`` fields of the gait options given (request units; a 0 that means unset
+    replaced by what it stands for, ``gait_options.resolve_unset``), less ``exclude``."""
+    return resolve_unset({o.name: o.from_cli(getattr(args, o.name)) for o in OPTIONS if o.name not in exclude})
 
 
 def point_values(args: argparse.Namespace, name: str, default_range: tuple[float, float, float] | None = None

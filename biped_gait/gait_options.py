@@ -5,8 +5,17 @@ solves gaits (the ``biped-gait`` verbs, the planner's ``plan_gait`` service and
 An option's ``name`` is the field of the core's ``GaitRequest``, of the ``PlanGait`` request and
 the ``OptimizeArmSwing`` goal, and the simulator's parameter; the command line spells it
 ``--name-with-dashes`` (``--alpha-deg`` for the arm amplitude, in degrees there, radians
-elsewhere). Values are SI with radians. No sentinels: ``friction`` NaN is the parameter set's
-coefficient and inf no friction cone; a bound of inf is none; a margin of 0 is none.
+elsewhere). Values are SI with radians. ``friction`` NaN is the parameter set's coefficient and inf
+no friction cone; a bound of inf is none; a margin of 0 is none; a ``step_width`` of NaN is the
+hips' spacing and a ``turn_radius`` of inf straight.
+
+**0 means unset** where 0 is not a meaningful value (``unset``): a ROS message field cannot
+default to NaN or inf (ros2/rosidl issue 351), so a default-constructed request would otherwise
+ask for a frictionless floor or a zero bound. A friction coefficient of 0 is the parameter set's
+(no gait walks on a frictionless floor), a joint-rate bound of 0 is none, a step width of 0 the
+hips' spacing, a turn radius of 0 straight (as NaN is). ``resolve_unset`` applies it, the same on
+every interface (the verbs, the service, the action, the simulator's parameters); NaN and inf
+keep their meanings.
 
 ``POINT`` holds where a gait is (L, T, alpha: one value, a list or a range, as each verb needs),
 ``OPTIONS`` how it is solved and judged, ``MARGINS`` the options a gait must meet beyond the
@@ -33,7 +42,8 @@ ALPHA_RANGE_DEG = (0.0, 45.0, 1.5)  # the arm amplitudes searched and swept by d
 class GaitOption:
     """One option: ``default`` in SI units with radians (``unit``; '' for none), ``help`` a
     phrase saying what it is, ``choices`` for a word, ``flag`` the command line's spelling when
-    it is not the name's, ``degrees`` when the command line takes degrees."""
+    it is not the name's, ``degrees`` when the command line takes degrees, ``unset`` the value a
+    0 stands for where 0 is not a meaningful value (None: 0 is itself)."""
 
     name: str
     default: float | str
@@ -42,6 +52,7 @@ class GaitOption:
     choices: tuple[str, ...] = ()
     flag: str = ""
     degrees: bool = False
+    unset: float | None = None
 
     @property
     def cli_flag(self) -> str:
@@ -94,19 +105,32 @@ OPTIONS = (
     GaitOption("effort_coordinates", "joint", "", "the effort's reading: on joint angles (the paper's eq. 12) or on "
                "the links' absolute angles", choices=("joint", "absolute")),
     GaitOption("friction", math.nan, "", "friction coefficient of the floor on the double support's reaction "
-               "impulses and the step's ground reaction (NaN: the parameter set's; inf: no cone)"),
+               "impulses and the step's ground reaction (0 or NaN: the parameter set's; inf: no cone)", unset=math.nan),
     GaitOption("rate_bound", math.inf, "rad/s", "margin: bound on the joint rates between the double support's "
-               "sub-phases (inf: none)"),
+               "sub-phases (0 or inf: none)", unset=math.inf),
     GaitOption("min_clearance", 0.0, "m", "margin: least swing-tip height above the ground on (0.05 T, 0.95 T)"),
     GaitOption("friction_margin", 0.0, "", "margin: the reaction impulses and the step's ground reaction within "
                "mu - this"),
-    GaitOption("step_width", math.nan, "m", "distance between the feet (NaN: the hips' spacing; another needs hip "
-               "roll and yaw joints)"),
-    GaitOption("turn_radius", math.inf, "m", "radius of the circle walked, signed: positive turns left (inf: "
-               "straight; a finite one is a stride of two steps, planned by plan, with hip roll and yaw joints)"),
+    GaitOption("step_width", math.nan, "m", "distance between the feet (0 or NaN: the hips' spacing; another needs "
+               "hip roll and yaw joints)", unset=math.nan),
+    GaitOption("turn_radius", math.inf, "m", "radius of the circle walked, signed: positive turns left (0, NaN or "
+               "inf: straight; a finite one is a stride of two steps, planned by plan, with hip roll and yaw joints)",
+               unset=math.inf),
 )
 MARGINS = ("rate_bound", "min_clearance", "friction_margin")
 OPTION_BY_NAME = {option.name: option for option in (*POINT, *OPTIONS)}
+
+
+def resolve_unset(fields: dict[str, object]) -> dict[str, object]:
+    """``fields`` (options by name) with each 0 that means unset replaced by the value it stands
+    for, and a NaN turn radius by inf (straight); every other value as given."""
+    out = dict(fields)
+    for name, value in fields.items():
+        option = OPTION_BY_NAME.get(name)
+        if option is not None and option.unset is not None and isinstance(value, float) and (
+                value == 0.0 or (name == "turn_radius" and math.isnan(value))):
+            out[name] = option.unset
+    return out
 
 
 def defaults() -> dict[str, float | str]:

@@ -84,14 +84,16 @@ def test_a_failed_solve_becomes_nan_and_its_reasons(planner):
     assert not orbit_from_msg(msg).converged
 
 
-def test_requests_carry_the_vocabulary_without_sentinels_and_unknown_modes_are_refused():
+def test_requests_carry_the_vocabulary_with_0_as_unset_and_unknown_modes_are_refused():
     req = PlanGait.Request(step_length=0.4, period=0.5, arm_amplitude=0.3, mode=PlanGait.Request.ANTI_NORMAL,
                            friction=math.nan, rate_bound=math.inf)
     core = request_from_msg(req, "aoustin2013")
     assert core == dataclasses.replace(GaitRequest(0.4, 0.5, 0.3, GaitMode.ANTI_NORMAL, "aoustin2013"), friction=core.friction)
     assert math.isnan(core.friction) and core.rate_bound == math.inf
-    # a field left at the message's 0 is a value, not "the default": a frictionless floor, refused
-    assert request_from_msg(PlanGait.Request(), "aoustin2013").friction == 0.0
+    # a field left at the message's 0 means unset where 0 is not a meaningful value
+    unset = request_from_msg(PlanGait.Request(), "aoustin2013")
+    assert math.isnan(unset.friction) and math.isinf(unset.rate_bound) and math.isnan(unset.step_width)
+    assert math.isinf(unset.turn_radius) and unset.min_clearance == 0.0 and unset.friction_margin == 0.0
     key = request_key(gait_fields(req, "aoustin2013", (*POINT_NAMES, *OPTION_NAMES)))
     assert key == request_key(gait_fields(req, "aoustin2013", (*POINT_NAMES, *OPTION_NAMES)))  # NaN keys match
     assert dict(key)["friction"] == "nan" and dict(key)["mode"] == "anti-normal"

@@ -96,3 +96,16 @@ def test_the_old_dialects_are_gone(capsys, line, message):
 def test_the_parsers_constants_are_the_studies():
     assert PUSH_DIRECTIONS == tuple(push_study.STUDY_DIRECTIONS)
     assert PUSH_PHASE == push_study.PHASE and MOMENTUM_RATE == DEFAULT_RATE and MAX_CASES == SWEEP_MAX_CASES
+
+
+def test_0_means_unset_where_0_is_not_a_value_the_same_on_every_verb():
+    """A friction coefficient, a joint-rate bound, a step width or a turn radius of 0 is the
+    unset value (a message field cannot default to NaN or inf): the verbs resolve it as the
+    service, the action and the simulator do (``resolve_unset``); every other 0 is itself."""
+    fields = request_fields(parse("plan", "--friction", "0", "--rate-bound", "0", "--step-width", "0",
+                                  "--turn-radius", "0", "--min-clearance", "0"))
+    assert math.isnan(fields["friction"]) and math.isinf(fields["rate_bound"]) and math.isnan(fields["step_width"])
+    assert math.isinf(fields["turn_radius"]) and fields["min_clearance"] == 0.0
+    assert {o.name for o in OPTIONS if o.unset is not None} == {"friction", "rate_bound", "step_width", "turn_radius"}
+    assert math.isinf(request_fields(parse("plan", "--turn-radius", "nan"))["turn_radius"])
+    assert request_fields(parse("plan", "--friction", "0.3"))["friction"] == 0.3

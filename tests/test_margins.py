@@ -1,11 +1,10 @@
 """Margins as requests: a gait that meets the limits but not the margins is refused as such (the
 swing clearance, the friction margin on the step and the impulses, the joint-rate bound), no
-margin computes today's gait to the bit, and the atlas answers margins by filtering its nodes."""
+margin computes today's gait (within the reference figures' tolerances), and the atlas answers margins by filtering its nodes."""
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 
 import numpy as np
@@ -19,6 +18,7 @@ from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait.margins import PREFIX, Margins, MarginVerdict
 
 from .conftest import DEFAULT_REQUEST
+from .reference_figures import mismatches
 from .test_cli import run
 
 pytestmark = pytest.mark.core
@@ -28,12 +28,12 @@ def plan(planner, **fields):
     return planner.plan(dataclasses.replace(DEFAULT_REQUEST, **fields))
 
 
-def test_no_margin_is_todays_gait_to_the_bit(planner, default_gait):
+def test_no_margin_is_todays_gait(planner, default_gait):
     zero = plan(planner, min_clearance=0.0, friction_margin=0.0, rate_bound=math.inf)
     now, before = views.to_dict(zero), views.to_dict(default_gait)
     for figures in (now, before):
         figures.pop("solve_time_s")
-    assert json.dumps(now) == json.dumps(before)
+    assert not mismatches(now, before)
     keys = list(now)
     assert keys[-4:] == ["trajectory", "min_clearance", "friction_margin", "within_limits"]  # new keys come last
     assert now["within_limits"] is True and now["min_clearance"] == 0.0 and now["friction_margin"] == 0.0

@@ -229,7 +229,6 @@ ACTION = "/biped_gait_planner/optimize_arm_swing"
 
 
 def send_goal(ros, client, **goal):
-    from biped_gait_interfaces.action import OptimizeArmSwing
 
     feedback = []
     request = optimize_goal(**goal)
@@ -312,18 +311,57 @@ def test_a_plan_without_its_trajectory_is_the_same_plan(ros):
         assert np.array_equal(getattr(compact.plan, name), getattr(full.plan, name)), name
 
 
-def test_friction_nan_is_the_sets_zero_a_frictionless_floor_and_inf_no_cone(ros, planner, default_gait):
+def test_a_default_constructed_request_plans_the_default_gait(ros, planner, default_gait):
+    """``PlanGait.Request()`` (what a ROS user writes first, and ``{}`` from a command line):
+    every field at its .srv default or 0, and 0 means unset where 0 is not a meaningful value."""
+    response = ros.call(ros.client, PlanGait.Request())
+    assert response.success, response.message
+    plan = response.plan
+    assert plan.effort_cost == pytest.approx(default_gait.W, rel=1e-9) and plan.admissible
+    assert plan.friction == planner.params.friction == 0.5 and math.isinf(plan.rate_bound)
+    assert plan.step_width == pytest.approx(planner.params.hip_spacing) and math.isinf(plan.turn_radius)
+    assert response.next_steps == []
+
+
+# Each float field of PlanGait.Request set to 0 in an otherwise default request: what 0 means
+# (the .srv and docs/ros.md say the same). "default": 0 is unset and plans the default gait;
+# "refused ...": 0 is not a value the field takes; "no arm swing": 0 is a value.
+ZERO_MEANS = {
+    "step_length": "refused: step length must be in (0, 1.814) m",
+    "period": "refused: period must be positive",
+    "arm_amplitude": "no arm swing",
+    "friction": "default",
+    "rate_bound": "default",
+    "min_clearance": "default",
+    "friction_margin": "default",
+    "step_width": "default",
+    "turn_radius": "default",
+}
+
+
+def test_every_fields_zero_means_what_the_interface_says(ros, planner, default_gait):
+    fields = {name for name, kind in PlanGait.Request.get_fields_and_field_types().items() if kind == "double"}
+    assert fields == set(ZERO_MEANS), "a field of PlanGait.Request without its meaning of 0 in this test"
+    no_swing = planner.plan(GaitRequest(0.45, 0.45, 0.0, "normal"))
+    for name, meaning in ZERO_MEANS.items():
+        response = ros.call(ros.client, PlanGait.Request(**{name: 0.0}))
+        if meaning.startswith("refused: "):
+            assert not response.success and meaning.removeprefix("refused: ") in response.message, (name, response.message)
+        else:
+            expected = default_gait.W if meaning == "default" else no_swing.W
+            assert response.success and response.plan.effort_cost == pytest.approx(expected, rel=1e-9), (name, meaning)
+
+
+def test_friction_nan_is_the_sets_and_inf_no_cone(ros, planner, default_gait):
     nan = ros.call(ros.client, plan_request(friction=math.nan))
     assert nan.success and nan.plan.friction == planner.params.friction == 0.5
     assert nan.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
-    zero = ros.call(ros.client, plan_request(friction=0.0))
-    assert not zero.success and "frictionless floor, on which no gait walks" in zero.message
     free = ros.call(ros.client, plan_request(friction=math.inf))
     expected = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5), "normal", friction=math.inf))
     assert free.success and math.isinf(free.plan.friction)
     assert free.plan.effort_cost == pytest.approx(expected.W, rel=1e-12) and expected.W < default_gait.W
-    unbounded = ros.call(ros.client, plan_request(rate_bound=0.0))
-    assert not unbounded.success and "joint-rate bound must be positive (or inf)" in unbounded.message
+    negative = ros.call(ros.client, plan_request(rate_bound=-1.0))
+    assert not negative.success and "joint-rate bound must be positive (or inf)" in negative.message
 
 
 def test_a_gait_that_misses_only_the_margins_says_so_on_the_wire(ros, default_gait):
@@ -334,6 +372,26 @@ def test_a_gait_that_misses_only_the_margins_says_so_on_the_wire(ros, default_ga
     assert response.plan.min_clearance == 0.005 and response.plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
     margin = ros.call(ros.client, plan_request(friction_margin=0.1))
     assert margin.plan.friction_margin == 0.1 and max(margin.plan.impulse_friction_ratios) <= 0.4 + 1e-9
+
+
+def test_a_default_constructed_goal_optimizes_the_default_gaits_arm_swing(ros, action_client):
+    """``OptimizeArmSwing.Goal()``: friction, rate bound, step width and turn radius 0 (unset),
+    the range and its step at the .action's defaults: the default gait's optimum."""
+    from action_msgs.msg import GoalStatus
+
+    from biped_gait_interfaces.action import OptimizeArmSwing
+
+    sent = action_client.send_goal_async(OptimizeArmSwing.Goal())
+    ros.wait(sent.done, 30.0)
+    future = sent.result().get_result_async()
+    ros.wait(future.done, 120.0)
+    assert future.result().status == GoalStatus.STATUS_SUCCEEDED
+    result = future.result().result
+    handle, _ = send_goal(ros, action_client)  # the vocabulary's defaults: the same goal, from the cache
+    again = handle.get_result_async()
+    ros.wait(again.done, 120.0)
+    assert result.success and result.interior and again.result().result.message.endswith("(cached)")
+    assert again.result().result.alpha_opt == result.alpha_opt
 
 
 def test_the_action_takes_the_gait_options_and_answers_again_from_its_cache(ros, action_client, planner):

@@ -4,9 +4,10 @@ planner's requests and goals built from the gait vocabulary's defaults.
 
 Waits spin the executor with ``spin_once`` in a loop (faster than
 ``spin_until_future_complete`` for a client, and never stuck on a signal). A message's fields
-start at 0, and a .srv cannot give NaN or inf as a default: ``plan_request`` and
-``optimize_goal`` start from the vocabulary's (friction NaN: the parameter set's; rate_bound
-inf: none), so that a client sets only what it means.
+start at 0, which means unset where 0 is not a meaningful value (``gait_options.resolve_unset``):
+a default-constructed request is the default gait. ``plan_request`` and ``optimize_goal`` start
+from the vocabulary's defaults as they are (friction NaN: the parameter set's; rate_bound inf:
+none), so that a client sets only what it means and reads what it sent.
 """
 
 from __future__ import annotations

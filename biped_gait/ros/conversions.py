@@ -17,7 +17,7 @@ from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.gait.configurations import GaitMode
-from ..gait_options import OPTIONS, POINT
+from ..gait_options import OPTIONS, POINT, resolve_unset
 from ..core.gait.gait import Gait, Stride
 from ..core.gait.views import FIELDS
 from ..core.dynamics.impulses import EffortOptions
@@ -44,17 +44,11 @@ def mode_from_msg(code: int) -> GaitMode:
 def gait_fields(msg, default_params: str, names: Sequence[str] = OPTION_NAMES) -> dict[str, object]:
     """The gait vocabulary's fields ``names`` of a request or goal ``msg`` (same names, same
     units) as ``GaitRequest`` fields: the mode parsed from its code, an empty ``params`` the
-    node's ``default_params``; a ``step_width`` of 0 is the core's NaN (the hips' spacing) and a
-    ``turn_radius`` of 0 or NaN the core's inf (straight), as the interface documents (a message
-    field cannot default to NaN or inf); no other value is replaced (NaN friction is the core's)."""
-    fields = {name: getattr(msg, name) for name in names}
+    node's ``default_params``, and a 0 that means unset replaced by what it stands for
+    (``gait_options.resolve_unset``: a message field cannot default to NaN or inf)."""
+    fields = resolve_unset({name: getattr(msg, name) for name in names})
     fields["mode"] = mode_from_msg(msg.mode)
     fields["params"] = msg.params or default_params
-    if fields.get("step_width") == 0.0:
-        fields["step_width"] = math.nan
-    radius = fields.get("turn_radius")
-    if radius is not None and (radius == 0.0 or math.isnan(radius)):
-        fields["turn_radius"] = math.inf
     return fields
 
 

@@ -82,7 +82,7 @@ from biped_gait_interfaces.srv import PlanGait, Push
 
 from ..core.gait.configurations import GaitMode
 from ..core.gait.planner import GaitRequest, validate_request
-from ..gait_options import OPTIONS, POINT, GaitOption
+from ..gait_options import OPTIONS, POINT, GaitOption, resolve_unset
 from ..core.walking.pacing import Pacer
 from ..core.model.params import load_params, shipped_param_names
 from ..core.walking.push import AppliedPush
@@ -203,7 +203,7 @@ class SimulatorNode(Node):
         prepare_walking()  # what the walk loads once, now rather than when it starts
         gait = {name: value[name] for name in GAIT_NAMES}
         try:
-            validate_request(GaitRequest(**{**gait, "params": ""}), load_params(value["params"] or None))
+            validate_request(GaitRequest(**resolve_unset({**gait, "params": ""})), load_params(value["params"] or None))
         except ValueError as exc:
             raise ValueError(f"{exc} (the requested plan's parameters: SI units, angles in rad here; the biped-gait "
                              "command takes degrees)") from None
