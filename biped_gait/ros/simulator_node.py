@@ -33,7 +33,8 @@ slowest gait.
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: ``engine``
 ``hybrid`` (the planner's model) or ``mujoco`` (MuJoCo, the double support as torque pulses of
-``pulse_duration``; ``core/walking/mujoco_engine.py``): the same topics, events and recording.
+``pulse_duration``; ``core/walking/engines/mujoco.py``, ``core/walking/phases/pulses.py``): the same
+topics, events and recording.
 Speed and turn: ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in
 rad/s), walked with transition steps within the envelope published on ``~/velocity_envelope``
 (biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
@@ -92,8 +93,10 @@ from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
-from ..core.walking.walk import (ENGINES, PULSE_DURATION, CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples,
-                                 Touchdown, Walk, prepare_walking)
+from ..core.walking.events import CouldNotStart, Fell, Finished, StepSamples, Touchdown
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import prepare_walking
+from ..core.walking.walk import ENGINES, PULSE_DURATION, Walk
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
@@ -610,7 +613,7 @@ class SimulatorNode(Node):
                     publish_clock(clock[k])
                     sim_clock.latest_ns = stamp
                     if k == 0:
-                        self.phases.sample(first.step, first.stance_side, first.t, base_ns)
+                        self.phases.sample(first.step, first.stance_side, first.phase, first.t, base_ns)
                     for send, data in outputs:
                         send(data[k], stamp)
                     if live is not None:

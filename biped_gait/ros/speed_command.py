@@ -34,7 +34,7 @@ from ..core.model.biped import BipedModel
 from ..core.walking.start_stop import why_not
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
-from ..core.walking.walk import Walker
+from ..core.walking.runner import Walker
 from ..recording import topics
 from .qos import LATCHED
 from .walk_messages import stamp_msg

@@ -35,7 +35,8 @@ from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from ..core.walking.push import DIRECTIONS, Push, horizontal_impulse
 from ..core.walking.steering import DEFAULT_RATE
-from ..core.walking.walk import PlannedOrbit, Walker
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
 from .executors import planner_for
 
 if TYPE_CHECKING:  # matplotlib and tqdm are imported where they are used: the CLI reads this module's defaults

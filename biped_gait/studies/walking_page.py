@@ -28,7 +28,8 @@ from ..core.dynamics.settings import DEFAULTS
 from ..core.gait.stability import closed_loop
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.walking.transitions import follower_for
-from ..core.walking.walk import PlannedOrbit, Walker
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
 from .executors import planner_for
 from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushLimit, limit_vs_alpha_figure, polar_figure,
                          run_push_study)

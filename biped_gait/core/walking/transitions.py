@@ -44,7 +44,8 @@ from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
 from .speed import MAX_SLOPE, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
 from .steering import pelvis_pitch
-from .walk import Cycle, PlannedOrbit, Walker, as_cycle
+from .orbit import Cycle, PlannedOrbit, as_cycle
+from .runner import Walker
 from ..model.biped import BipedModel
 
 MAX_CHANGE = 0.05  # m/s per step: the default bound on the aimed gait's change of speed
