@@ -23,9 +23,12 @@ os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", "93")
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
-from biped_gait.core.walking.mujoco_engine import MujocoEngine  # noqa: E402
+from biped_gait.core.walking.engines.mujoco import MujocoEngine  # noqa: E402
+from biped_gait.core.walking.phases.pulses import Coast  # noqa: E402
 from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
-from biped_gait.core.walking.walk import Finished, PlannedOrbit, Walk  # noqa: E402
+from biped_gait.core.walking.events import Finished  # noqa: E402
+from biped_gait.core.walking.orbit import PlannedOrbit  # noqa: E402
+from biped_gait.core.walking.walk import Walk  # noqa: E402
 from harness import RATE, Timed, median_range, simulator_factor  # noqa: E402
 
 PULSE = 0.005
@@ -38,12 +41,15 @@ def core_walk(planner: GaitPlanner, steps: int, engine: str) -> tuple[float, flo
     supports (zero for the hybrid walk)."""
     walk = Walk(PlannedOrbit.of(planner.plan(REQUEST)), RATE, steps, engine=engine, pulse_duration=PULSE,
                 momentum_rate=DEFAULT_RATE)
-    engine_object = walk.walker.engine
     stepping = planning = None
-    if isinstance(engine_object, MujocoEngine):
-        stepping, planning = Timed(engine_object, "_advance"), Timed(engine_object, "_plan")
+    plan = Coast._plan
+    if isinstance(walk.walker.engine, MujocoEngine):
+        stepping, planning = Timed(walk.walker.engine, "_advance"), Timed(Coast, "_plan")
     start = time.perf_counter()
-    items = list(walk.batches())
+    try:
+        items = list(walk.batches())
+    finally:
+        Coast._plan = plan
     wall = time.perf_counter() - start
     assert isinstance(items[-1], Finished), items[-1]
     return (items[-1].t / wall, stepping.total if stepping else 0.0, planning.total if planning else 0.0)

@@ -37,7 +37,10 @@ from biped_gait.core.gait.planner import GaitPlanner, GaitRequest  # noqa: E402
 from biped_gait.core.dynamics.samples import NativeSamples  # noqa: E402
 from biped_gait.core.model.params import load_params  # noqa: E402
 from biped_gait.core.walking.steering import DEFAULT_RATE  # noqa: E402
-from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker  # noqa: E402
+from biped_gait.core.walking.events import StepSamples  # noqa: E402
+from biped_gait.core.walking.orbit import PlannedOrbit  # noqa: E402
+from biped_gait.core.walking.runner import Walker  # noqa: E402
+from biped_gait.core.walking.walk import Walk  # noqa: E402
 from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
 from biped_gait.ros.walk_messages import SampleMessages  # noqa: E402

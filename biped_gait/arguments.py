@@ -77,6 +77,7 @@ def add_point(parser: argparse.ArgumentParser, step_length: str = ONE, period: s
             continue
         flag, unit = option.cli_flag, option.cli_unit
         default = option.to_cli(option.default)
+        in_words = alpha_default if option is POINT[2] else None
         if how == ONE:
             parser.add_argument(flag, type=float, default=default, metavar=unit.upper().replace("/", "_") or "V",
                                 help=f"{option.help} ({unit}), default {default:g}")
@@ -84,7 +85,7 @@ def add_point(parser: argparse.ArgumentParser, step_length: str = ONE, period: s
         if how == MANY:
             group = parser.add_mutually_exclusive_group()
             group.add_argument(flag, nargs="+", type=float, metavar="V",
-                               help=f"{option.help} ({unit}): values, default {alpha_default or f'{default:g}'}")
+                               help=f"{option.help} ({unit}): values, default {in_words or f'{default:g}'}")
             target = group
         else:
             target = parser

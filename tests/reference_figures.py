@@ -267,7 +267,9 @@ def walk_arrays(ulps: int = 0) -> dict[str, np.ndarray]:
     """20 steps of the default gait walked with momentum steering at ``WALK_RATE`` samples per
     second (``ulps``: its request moved as ``plan_figures`` moves them)."""
     from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-    from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Touchdown, Walk
+    from biped_gait.core.walking.events import StepSamples, Touchdown
+    from biped_gait.core.walking.orbit import PlannedOrbit
+    from biped_gait.core.walking.walk import Walk
 
     gait = GaitPlanner().plan(GaitRequest(moved(0.45, ulps), moved(0.45, -ulps), moved(math.radians(23.5), ulps),
                                           "normal"))

@@ -13,7 +13,9 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from std_msgs.msg import String
 
-from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk
+from biped_gait.core.walking.events import StepSamples
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.walk import Walk
 from biped_gait.recording import topics
 from biped_gait.recording.schemas import SEPARATOR, schema_text
 from biped_gait.ros.cdr_templates import CdrTemplate

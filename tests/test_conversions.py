@@ -20,7 +20,7 @@ from std_msgs.msg import Header  # noqa: E402
 from biped_gait.core.gait.configurations import GaitMode  # noqa: E402
 from biped_gait.core.gait.views import FIELDS  # noqa: E402
 from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
-from biped_gait.core.walking.walk import PlannedOrbit  # noqa: E402
+from biped_gait.core.walking.orbit import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
 from biped_gait.ros.conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, mode_from_msg, orbit_from_msg,  # noqa: E402
                                         plan_msg, request_from_msg, request_key, urdf_joints)

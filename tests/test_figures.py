@@ -1,4 +1,6 @@
-"""Figures: the two-step momentum curve against the double-support figures, PNG files written."""
+"""Figures: the two-step momentum curve against the double-support figures, PNG files written;
+the maps, push and plan figures say what a reader needs (margins, units, blank cells, the stance
+foot, the friction line)."""
 
 from __future__ import annotations
 
@@ -8,8 +10,12 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.studies.figures import (effort_figure, momentum_figure, period_figure, save, sweep_figures,
+from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.studies.figures import (effort_figure, momentum_figure, period_figure, plan_figure, save, sweep_figures,
                                         two_step_momentum)
+from biped_gait.studies.maps import Optimum, WalkingMaps
+from biped_gait.studies.push_study import STUDY_DIRECTIONS, PushLimit, limit_vs_alpha_figure, polar_figure
+from biped_gait.studies.results_page import maps_figures
 from biped_gait.studies.sweep import solve_chain
 
 from .conftest import DEFAULT_REQUEST
@@ -71,3 +77,57 @@ def test_a_period_sweep_draws_w_against_t_with_the_marks_in_the_legend(tmp_path,
     assert ax.get_xlabel() == "step period T (s)" and np.allclose(ax.lines[0].get_xdata(), [0.44, 0.45, 0.46])
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "not admissible (its W)" in labels and "normal" in labels
+
+
+def made_up_maps(margins: str) -> WalkingMaps:
+    """Maps on a 4 x 4 grid (no solve): the lower half without an admissible gait, two optima,
+    one of whose other-mode gait is not admissible."""
+    region = np.zeros((4, 4), dtype=int)
+    region[:, :2] = 1
+    optima = [Optimum(0.40, 0.50, 0.4, 30.0, 33.0, True), Optimum(0.50, 0.50, 0.5, 35.0, math.nan, False)]
+    return WalkingMaps("aoustin2013", GaitMode.NORMAL, margins, np.array([0.35, 0.40, 0.45, 0.50]),
+                       np.array([0.35, 0.40, 0.45, 0.50]), region, [], optima)
+
+
+def test_margin_maps_say_their_margins_and_explain_their_blank_cells():
+    """The maps of a run with margins are titled and named by them (the plain ones keep their
+    names); the cells without an admissible gait are shaded and the legends say what shading,
+    white and an empty tile mean."""
+    plain, margins = maps_figures(made_up_maps("")), maps_figures(made_up_maps("swing clearance > 5 mm"))
+    assert [name for _, name in plain.values()] == ["map-region-aoustin2013.png", "map-optimum-aoustin2013.png",
+                                                    "map-ratio-aoustin2013.png"]
+    assert [name for _, name in margins.values()] == [f"map-{kind}-aoustin2013-swing-clearance-5-mm.png"
+                                                      for kind in ("region", "optimum", "ratio")]
+    region, optimum, ratio = (fig for fig, _ in margins.values())
+    assert region.axes[0].get_title().splitlines()[-1] == "margins: swing clearance > 5 mm"
+    assert "margins: swing clearance > 5 mm" in optimum.texts[0].get_text()  # the suptitle
+    assert "margins: swing clearance > 5 mm" in ratio.axes[0].get_title()
+    legend = [t.get_text() for t in ratio.legends[0].get_texts()]
+    assert any("no admissible normal gait within the margins" in t for t in legend)
+    assert any("every other atlas node" in t for t in legend)
+    assert any("anti-normal gait at alpha* is not admissible" in t for t in legend)
+
+
+def test_push_figures_give_units_and_the_stance_foot():
+    """The polar plot's radius is in N s and names the stance foot; the log axis of the push
+    against alpha reads as numbers, not powers of ten."""
+    limits = [PushLimit(name, angle, alpha, 0.5, 0.25, 0.5 + 3 * abs(math.sin(angle)) + alpha, math.inf, "", ())
+              for alpha in (0.0, 0.4) for name, angle in STUDY_DIRECTIONS.items()]
+    polar = polar_figure(limits, "test")
+    ax = polar.axes[0]
+    assert any(t.get_text() == "N s" for t in ax.texts) and "right foot in stance" in ax.get_title()
+    assert "stance" in [t.get_text() for t in ax.get_xticklabels()][6]
+    fig = limit_vs_alpha_figure(limits, "test")
+    fig.canvas.draw()
+    labels = [t.get_text() for t in fig.axes[0].get_yticklabels() if t.get_text()]
+    assert labels and all("10^" not in t and "times" not in t for t in labels), labels
+    assert {"0.5", "1", "2"} <= set(labels)
+
+
+def test_the_plan_pictures_friction_line_is_apart_from_the_curves(planner, default_gait):
+    """The friction panel starts at 0 and goes up to twice mu: mu = 0.5 reads as a line the ratio
+    stays under, not as where a curve saturates."""
+    fig = plan_figure(default_gait, planner.model)
+    reaction, ratio = fig.axes[2], fig.axes[4]
+    assert reaction.get_ylim()[0] == 0.0 and ratio.get_ylim() == (0.0, 1.0)
+    assert any(t.get_text().startswith("mu = 0.5") for t in ratio.texts)

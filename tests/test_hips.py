@@ -13,7 +13,10 @@ import pytest
 
 from biped_gait.core.gait import views
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker
+from biped_gait.core.walking.events import StepSamples
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 pytestmark = pytest.mark.core
 

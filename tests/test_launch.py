@@ -35,14 +35,18 @@ def config(tmp_path: Path, **simulator) -> Path:
 
 
 def test_a_walk_that_ends_stops_both_nodes(tmp_path):
+    """Both nodes record under --record-dir (over the file's record_dir), where --analyze finds the walk."""
     cfg = config(tmp_path, steps=2, real_time_factor=0.0, arm_amplitude=0.41)
-    proc = subprocess.run([LAUNCH, "--config", str(cfg), "--record-dir", str(tmp_path / "bags")],
+    chosen = tmp_path / "chosen"
+    proc = subprocess.run([LAUNCH, "--config", str(cfg), "--record-dir", str(chosen), "--analyze"],
                           cwd=tmp_path, capture_output=True, text=True, timeout=180)
     assert proc.returncode == 0, proc.stderr[-2000:]
-    bags = sorted(p.name.split("_")[0] for p in (tmp_path / "bags").iterdir())
+    assert not (tmp_path / "bags").exists()
+    bags = sorted(p.name.split("_")[0] for p in chosen.iterdir())
     assert bags == ["planner", "walk"]
-    for bag in (tmp_path / "bags").iterdir():
+    for bag in chosen.iterdir():
         assert is_complete(next(bag.glob("*.mcap"))), bag
+    assert "walk: 2 steps" in proc.stdout and next(chosen.glob("walk_*/analysis/summary.md")).is_file()
 
 
 def test_ctrl_c_is_forwarded_and_recordings_are_finalized(tmp_path):

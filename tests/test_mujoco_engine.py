@@ -1,6 +1,6 @@
-"""The walk in MuJoCo (``engine="mujoco"``, core/walking/mujoco_engine.py): the single support
-integrated by MuJoCo on the exported stance tree, the double support as torque pulses, the
-walker's re-aim as the feedback. Against the hybrid walker, and 20 steps of the default gait."""
+"""The walk in MuJoCo (``engine="mujoco"``, core/walking/engines/mujoco.py): the single support
+integrated by MuJoCo on the exported stance tree, the double support as torque pulses
+(core/walking/phases/pulses.py), the walker's re-aim as the feedback. Against the hybrid walker, and 20 steps of the default gait."""
 
 from __future__ import annotations
 
@@ -11,7 +11,10 @@ import pytest
 
 from biped_gait.core.walking.push import AppliedPush, Push
 from biped_gait.core.walking.steering import DEFAULT_RATE
-from biped_gait.core.walking.walk import Finished, PlannedOrbit, StepSamples, Touchdown, Walk, Walker
+from biped_gait.core.walking.events import Finished, StepSamples, Touchdown
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 pytestmark = pytest.mark.core
 
@@ -29,7 +32,7 @@ def test_the_first_step_is_the_hybrid_walkers_but_for_the_pulse(planner, default
     hybrid = Walker(planner.hybrid, orbit, rate=100.0, momentum_rate=DEFAULT_RATE).walk_step().touchdown
     walk = Walk(orbit, 100.0, 1, engine="mujoco", pulse_duration=pulse, momentum_rate=DEFAULT_RATE)
     outcome = walk.walker.walk_step()
-    mujoco = walk.walker.engine.touchdowns[0]
+    mujoco = outcome.touchdown.double_support
     assert outcome.touchdown is not None and hybrid.state_error < 1e-9
     q_t, qd_b = default_gait.step.q_target, default_gait.step.qd_b
     print(f"\nd = {pulse * 1e3:g} ms: predicted touchdown off the hybrid's by "
@@ -40,7 +43,9 @@ def test_the_first_step_is_the_hybrid_walkers_but_for_the_pulse(planner, default
     assert abs(mujoco.t - hybrid.t) < 1e-8
     assert 0.1 * pulse < np.max(np.abs(mujoco.q - q_t)) < CONFIGURATION_DRIFT * pulse
     assert outcome.touchdown.t == mujoco.t
-    assert mujoco.residual < 1e-7 and mujoco.friction_used <= planner.model.params.friction
+    assert mujoco.residual < 1e-7 and mujoco.friction_planned <= planner.model.params.friction + 1e-6
+    mu = planner.model.params.friction
+    assert all(math.hypot(*s.grf[:2]) <= mu * s.grf[2] for s in outcome.samples)  # MuJoCo's reaction in the cone
 
 
 def test_mujoco_walks_the_default_gait_twenty_steps_with_5_ms_pulses(planner, default_gait):
@@ -55,16 +60,17 @@ def test_mujoco_walks_the_default_gait_twenty_steps_with_5_ms_pulses(planner, de
     touchdowns = [item for item in items if isinstance(item, Touchdown)]
     assert isinstance(items[-1], Finished) and items[-1].steps == 20 and len(touchdowns) == 20
     mu = planner.model.params.friction
-    for record in walk.walker.engine.touchdowns:
+    records = [td.double_support for td in touchdowns]
+    for record in records:
         assert record.residual < 1e-7
-        assert record.friction_planned <= mu + 1e-6 and record.friction_used <= mu
+        assert record.friction_planned <= mu + 1e-6
         assert record.effort == pytest.approx(record.impulsive_effort, rel=0.1)
     grf = np.vstack([np.array([s.grf for s in item.samples]) for item in items if isinstance(item, StepSamples)])
-    assert np.min(grf[:, 2]) > 0
+    used = np.hypot(grf[:, 0], grf[:, 1]) / grf[:, 2]
+    assert np.min(grf[:, 2]) > 0 and np.max(used) <= mu
     durations = [td.t_step for td in touchdowns]
     print(f"\n20 steps in MuJoCo, d = 5 ms: durations {min(durations):.4f}-{max(durations):.4f} s, effort "
-          f"{walk.walker.engine.touchdowns[-1].effort:.2f} N m s (W {touchdowns[-1].W:.2f}), friction used "
-          f"{max(r.friction_used for r in walk.walker.engine.touchdowns):.3f}")
+          f"{records[-1].effort:.2f} N m s (W {records[-1].impulsive_effort:.2f}), friction used {np.max(used):.3f}")
     foot = walk.walker.state.stance_foot
     print(f"stance foot after 20 steps: {foot} m (steps of {foot[0] / 20:.4f} m: the pre-impact pulse moves the landing)")
     assert abs(foot[0] / 20 - 0.45) < 0.005 and foot[1:] == pytest.approx([-0.2, 0.0], abs=1e-9)
@@ -80,10 +86,11 @@ def test_an_unknown_engine_or_a_pulse_that_does_not_last_is_refused(default_gait
 
 
 def test_a_push_is_walked_off_in_mujoco(default_gait):
-    """A push of 0.25 N s forward on the trunk at 0.3 T of step 1 acts on MuJoCo's trunk; the walker
-    re-plans when the touchdown is due (the planner's model after the push) and walks it off as the
-    hybrid walker does (measured touchdown errors 0.41, 4.4, 0.99, 0.42, 0.32 rad/s against the
-    hybrid's 0.42, 5.2, 0.92, 0.20, 0.05)."""
+    """A push of 0.25 N s forward on the trunk at 0.3 T of step 1 acts on MuJoCo's state (the runner
+    cuts MuJoCo's step there and adds the velocity jump, as in the hybrid walk); the walk re-plans
+    when the touchdown is due (the planner's model after the push) and walks it off as the hybrid
+    walker does (measured touchdown errors 0.41, 4.47, 0.83, 0.35, 0.32 rad/s against the hybrid's
+    0.42, 5.2, 0.92, 0.20, 0.05)."""
     def push_in_step_1(walker: Walker) -> None:
         if walker.state.step == 1:
             walker.push(Push(np.array([0.25, 0.0, 0.0]), 0.3 * default_gait.period))
@@ -95,4 +102,5 @@ def test_a_push_is_walked_off_in_mujoco(default_gait):
     errors = [item.state_error for item in items if isinstance(item, Touchdown)]
     assert isinstance(items[-1], Finished) and len(errors) == 6
     assert len(pushes) == 1 and pushes[0].step == 1 and np.max(np.abs(pushes[0].delta_qd)) > 0.01
+    assert pushes[0].time_in_step == pytest.approx(0.3 * default_gait.period, abs=1e-12)  # at its instant
     assert errors[2] > 1.0 and errors[-1] < 0.5  # knocked off, and back to the 5 ms walk's (0.27)

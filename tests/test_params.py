@@ -8,7 +8,8 @@ import pytest
 import yaml
 
 from biped_gait.core.model.biped import BipedModel
-from biped_gait.core.model.params import load_params, params_from_dict, shipped_param_names
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.model.params import load_params, names_set, params_from_dict, shipped_param_names
 from biped_gait.core.model.yaml_files import parse_package_yaml, parse_yaml
 
 pytestmark = pytest.mark.core
@@ -83,6 +84,30 @@ def test_a_copied_file_loads(tmp_path):
 def test_non_physical_files_are_refused(tmp_path, edit, message):
     with pytest.raises(ValueError, match=message):
         load_params(_edited(tmp_path, edit))
+
+
+def test_a_file_set_is_named_by_its_path_or_its_name_never_by_another_set(tmp_path):
+    """``names_set``: the file's set is named by nothing, its path (or another path to the same
+    file) and its name; a shipped name names the shipped set, also where the file took that name
+    with other values; another file is never read. The planner of the file plans for it named
+    any of these ways (the tutorial's section 7)."""
+    path = _edited(tmp_path, lambda raw: raw.update(name="my-biped") or raw["links"]["arm"].update(mass=3.0))
+    mine = load_params(path)
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "copy").mkdir()
+    other = _edited(tmp_path / "elsewhere", lambda raw: raw.update(name="my-biped"))
+    for given in ("", path, "my-biped", str(tmp_path / "." / "edited.yaml")):
+        assert names_set(given, mine, path), given
+    for given in ("aoustin2013", other, "your-biped", str(tmp_path / "missing.yaml")):
+        assert not names_set(given, mine, path), given
+    copied = _edited(tmp_path / "copy", lambda raw: raw["links"]["arm"].update(mass=3.0))  # named aoustin2013 still
+    assert not names_set("aoustin2013", load_params(copied), copied) and names_set(copied, load_params(copied), copied)
+    assert names_set("aoustin2013", load_params(), None) and names_set("aoustin2013", load_params(), "aoustin2013")
+    planner = GaitPlanner(path, atlas=False)
+    gaits = [planner.plan(GaitRequest(0.45, 0.45, 0.41, params=given)) for given in ("", path, "my-biped")]
+    assert all(g.params == "my-biped" and g.W == gaits[0].W for g in gaits)
+    with pytest.raises(ValueError, match="holds parameter set 'my-biped'"):
+        planner.plan(GaitRequest(0.45, 0.45, 0.41, params="aoustin2013"))
 
 
 def test_unknown_name_is_refused():

@@ -11,9 +11,11 @@ pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not 
 import math
 import signal
 import time
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
+import yaml
 from mcap_ros2.reader import read_ros2_messages
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosbags.highlevel import AnyReader
@@ -24,7 +26,7 @@ from biped_gait.ros.client import ClientSide, optimize_goal, plan_request
 from biped_gait_interfaces.msg import GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
-from .ros_helpers import start_node, stop_node
+from .ros_helpers import start_node, start_simulator, stop_node
 
 pytestmark = pytest.mark.ros
 
@@ -217,10 +219,14 @@ def test_recording_holds_every_call_and_plan(tmp_path, stop_signal):
     plans = by_topic[topic]
     assert [p.arm_amplitude for p in plans] == [0.3, 0.32]  # the cached answer is not published again
     assert plans[1].effort == "l2" and len(plans[1].trajectory.points) == 91
+    # The node's health is recorded beside them, on its clock
+    health = by_topic.get("/diagnostics", [])
+    assert all(s.name == f"{name}: planning" for h in health for s in h.status)
     # The rosbag2 directory opens too, and the mcap-ros2-support decoder agrees.
     with AnyReader([bag_dir]) as reader:
-        assert {c.topic: c.msgcount for c in reader.connections} == {service + "/calls": 4, topic: 2}
-    decoded = [m for m in read_ros2_messages(str(mcap_path))]
+        assert {c.topic: c.msgcount for c in reader.connections} == {service + "/calls": 4, topic: 2,
+                                                                     "/diagnostics": len(health)}
+    decoded = [m for m in read_ros2_messages(str(mcap_path)) if m.channel.topic != "/diagnostics"]
     assert len(decoded) == 6
     assert [m.ros_msg.sequence for m in decoded if m.channel.topic.endswith("/calls")] == [1, 2, 3, 4]
 
@@ -473,7 +479,9 @@ def test_run_time_parameters_are_applied_and_the_others_refused_with_a_reason(tm
         assert set_("record", value(ParameterType.PARAMETER_BOOL, bool_value=False)).successful
         [first] = list((tmp_path / "bags").iterdir())
         with AnyReader([first]) as reader:  # finished when record went off: readable while the node runs
-            assert sum(c.msgcount for c in reader.connections) == 4  # two calls, two plans
+            counts = {c.topic: c.msgcount for c in reader.connections}
+        counts.pop("/diagnostics")  # its health, every second
+        assert sum(counts.values()) == 4  # two calls, two plans
         side.call(planner, plan_request(arm_amplitude=0.31))  # not recorded
         assert set_("record", value(ParameterType.PARAMETER_BOOL, bool_value=True)).successful
         side.call(planner, plan_request(arm_amplitude=0.32))
@@ -485,3 +493,45 @@ def test_run_time_parameters_are_applied_and_the_others_refused_with_a_reason(tm
     with AnyReader(second) as reader:
         calls = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages() if c.topic.endswith("/calls")]
     assert [c.arm_amplitude for c in calls] == [0.32]
+
+
+def test_a_planner_serving_a_yaml_set_answers_for_it_by_path_name_or_nothing(tmp_path, monkeypatch):
+    """The tutorial's own biped (section 7): a copy of the default set named my-biped with a
+    heavier arm, served as a planner's default_params by its absolute path. A request names it by
+    nothing, by its path (also by another path to the same file) or by its name: one set, one
+    answer (the later ones from the cache), the plan's params its name; a shipped set is still
+    served, another file is refused. A simulator given the same file walks the plan."""
+    monkeypatch.setenv("BIPED_GAIT_CACHE", str(tmp_path / "cache"))  # no atlas of the file: as a new user
+    raw = yaml.safe_load(resources.files("biped_gait.core.data").joinpath("aoustin2013.yaml").read_text())
+    raw["name"], raw["links"]["arm"]["mass"] = "my-biped", 3.0
+    mine = tmp_path / "my-biped.yaml"
+    mine.write_text(yaml.safe_dump(raw))
+    (tmp_path / "other.yaml").write_text(yaml.safe_dump({**raw, "name": "other"}))
+    name = "yaml_set_planner"
+    proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", f"default_params:={mine}",
+                      "-p", "record:=false", cwd=tmp_path)
+    side = ClientSide("yaml_set_client")
+    try:
+        client = side.node.create_client(PlanGait, f"/{name}/plan_gait")
+        side.connect(client)
+        answers = [side.call(client, plan_request(params=given), timeout=120.0)
+                   for given in ("", str(mine), "my-biped", "./my-biped.yaml", str(tmp_path / "." / "my-biped.yaml"))]
+        shipped = side.call(client, plan_request(params="aoustin2013"))
+        other = side.call(client, plan_request(params=str(tmp_path / "other.yaml")))
+        walk = start_simulator(tmp_path, name, f"params:={mine}", "steps:=2", "real_time_factor:=0.0",
+                               "exit_when_done:=true", "publish_rate:=50.0", "record:=false")
+        assert walk.wait(timeout=120) == 0, (tmp_path / "biped-gait-simulator.log").read_text()
+    finally:
+        side.close()
+        assert stop_node(proc) == 0, (tmp_path / "biped-gait-planner.log").read_text()
+    first, *again = answers
+    assert first.success, first.message
+    assert first.plan.params == "my-biped" and not first.message.endswith("(cached)")
+    for answer in again:
+        assert answer.success and answer.message.endswith("(cached)"), answer.message
+        assert answer.plan.effort_cost == first.plan.effort_cost and answer.plan.params == "my-biped"
+    assert shipped.success and shipped.plan.params == "aoustin2013"
+    assert shipped.plan.effort_cost != pytest.approx(first.plan.effort_cost, rel=1e-3)  # a heavier arm costs
+    assert not other.success and "unknown parameter set" in other.message
+    log = (tmp_path / "biped-gait-simulator.log").read_text()
+    assert "walk finished: 2 steps" in log

@@ -16,7 +16,11 @@ from biped_gait.core.model.biped import cross
 from biped_gait.core.walking.push import DIRECTIONS, Push, TrunkPush, horizontal_impulse
 from biped_gait.core.gait.stability import closed_loop
 from biped_gait.core.walking.steering import DEFAULT_RATE, momentum_row, pelvis_pitch, reference
-from biped_gait.core.walking.walk import PlannedOrbit, StepSamples, Walk, Walker
+from biped_gait.core.walking.events import StepSamples
+from biped_gait.core.walking.feedback import Feedback
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 pytestmark = pytest.mark.core
 
@@ -117,7 +121,8 @@ def test_steering_gains_are_the_plain_reaims_linearization(planner, default_gait
     hybrid = planner.hybrid
     ref = reference(hybrid, hybrid.flow(32), gait.step.q0, gait.step.q_target, gait.step.qd_a, gait.step.qd_b, gait.period)
     assert ref.theta == pytest.approx(gait.theta, abs=1e-12) and 0.98 < ref.b < 1.0
-    walker = Walker(hybrid, PlannedOrbit.of(gait), rate=1.0)
+    feedback = Feedback(hybrid)  # the plain re-aim
+    aim = feedback.aim((PlannedOrbit.of(gait),))
 
     def next_momentum(d_theta: float, d_momentum: float) -> float:
         q_pre = gait.step.q_target + d_theta * boundary_configurations(hybrid.bm).theta_direction
@@ -125,8 +130,8 @@ def test_steering_gains_are_the_plain_reaims_linearization(planner, default_gait
         row = impact.momentum_row[3:]
         shift = ref.momentum + d_momentum - row @ gait.step.qd_b  # the momentum held at M_p + d_momentum
         xd_b = np.concatenate([np.zeros(3), gait.step.qd_b + shift * row / (row @ row)])
-        v = walker._reaim(hybrid.exchange.configuration(q_pre), impact, xd_b, 0.0)
-        end = hybrid.flow(32).propagate(hybrid.exchange.configuration(q_pre), v, walker.next_period)
+        v, period = feedback.reaim_velocity(aim, hybrid.exchange.configuration(q_pre), impact, xd_b, 0.0)
+        end = hybrid.flow(32).propagate(hybrid.exchange.configuration(q_pre), v, period)
         return float(momentum_row(hybrid, end.q) @ end.qd)
 
     h = 1e-6

@@ -25,6 +25,7 @@ from mcap.reader import make_reader
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.serialization import deserialize_message
 from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
@@ -37,7 +38,7 @@ from biped_gait.ros.client import ClientSide, plan_request
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 from biped_gait_interfaces.srv import PlanGait
 
-from .ros_helpers import start_node, start_simulator, stop_node
+from .ros_helpers import read_bag, start_node, start_simulator, stop_node
 from .test_replay import same_messages
 
 pytestmark = pytest.mark.ros
@@ -107,11 +108,26 @@ def test_clock_tf_and_the_recording_as_users_expect(planner_node, side, tmp_path
     with open(path, "rb") as f:
         recorded = [(m.log_time, m.data) for _, _, m in make_reader(f).iter_messages(topics=["/tf"], log_time_order=True)]
     assert same_messages(tf, recorded)
-    # the metadata: rosbags opens it with every topic's QoS; the type hashes are rclpy's
+    # the metadata: rosbags opens it with every topic's QoS; the type hashes are rclpy's. Everything
+    # published is recorded but /clock (its values are the samples' log times: replay --clock)
     with AnyReader([bag]) as reader:
         qos = {c.topic: c.ext.offered_qos_profiles for c in reader.connections}
     assert set(qos) == {"/joint_states", "/odom", "/angular_momentum", "/tf", "/tf_static", "/robot_description",
-                        "/gait_events", "/gait_phase", "/biped_gait_simulator/velocity_envelope"}
+                        "/gait_events", "/gait_phase", "/biped_gait_simulator/velocity_envelope", "/diagnostics",
+                        "/biped_gait_simulator/iterations"}
+    # one clock: every log time and every header stamp recorded is simulated time (from 0 here)
+    recorded = read_bag(bag)
+    end = max(clocks)
+    assert all(0 <= stamp <= end + 2e9 for messages in recorded.values() for stamp, _ in messages)
+    [(logged, envelope)] = recorded["/biped_gait_simulator/velocity_envelope"]
+    assert ns(envelope.header.stamp) == logged <= clocks[0]  # the walk's start, in simulated time
+    health = [(stamp, m) for stamp, m in recorded["/diagnostics"]]
+    assert health and all(ns(m.header.stamp) == stamp for stamp, m in health)
+    [status] = health[-1][1].status  # published at once when the walk ended
+    walk = {kv.key: kv.value for kv in status.values}
+    assert status.name == "biped_gait_simulator: walk" and walk["state"] == "finished" and walk["touchdowns"] == "2"
+    counts = [m.data for _, m in recorded["/biped_gait_simulator/iterations"]]
+    assert counts == sorted(counts) and 0 < counts[-1] <= round(end * 500e-9) + 1  # samples at 500 Hz
     assert all(len(profiles) == 1 for profiles in qos.values())
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     hashes = {t["topic_metadata"]["name"]: t["topic_metadata"]["type_description_hash"]
@@ -158,7 +174,10 @@ def test_pause_resume_and_reset(planner_node, side, tmp_path):
 
 def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
     """A Foxglove client's view: the channels advertised with their ros2msg schemas, the robot
-    description sent on subscription, joint states streaming as CDR."""
+    description sent on subscription, joint states streaming as CDR, the node's health and step
+    counter too. The handshake is the SDK's: a client offering foxglove.sdk.v1 (the Foxglove app,
+    Lichtblick from 1.22, which offers both) connects; one offering only the older
+    foxglove.websocket.v1 is refused with HTTP 400, as by foxglove_bridge 3."""
     proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "record:=false", "live_view:=true",
                      "live_view_port:=0")
     log = tmp_path / "biped-gait-simulator.log"
@@ -169,9 +188,20 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
         assert match, log.read_text()
         while "walking L =" not in log.read_text() and time.monotonic() < deadline:
             time.sleep(0.1)
-        channels, received = asyncio.run(foxglove_client(int(match.group(1))))
+        port = int(match.group(1))
+        channels, received = asyncio.run(foxglove_client(port))
+        both, _ = asyncio.run(foxglove_client(port, ["foxglove.websocket.v1", "foxglove.sdk.v1"]))
+        with pytest.raises(websockets.InvalidStatus) as refused:
+            asyncio.run(foxglove_client(port, ["foxglove.websocket.v1"]))
     finally:
         assert stop_node(proc) == 0, log.read_text()
+    assert refused.value.response.status_code == 400
+    assert set(both) == set(channels)
+    assert {"/diagnostics", "/biped_gait_simulator/iterations", "/biped_gait_simulator/velocity_envelope"} <= set(channels)
+    assert channels["/diagnostics"]["schemaName"] == "diagnostic_msgs/msg/DiagnosticArray"
+    health = deserialize_message(received["/diagnostics"][-1], DiagnosticArray)
+    assert health.status[0].name == "biped_gait_simulator: walk"
+    assert deserialize_message(received["/biped_gait_simulator/iterations"][-1], UInt64).data > 0
     assert {"/robot_description", "/tf", "/tf_static", "/joint_states", "/angular_momentum"} <= set(channels)
     assert channels["/joint_states"]["schemaName"] == "sensor_msgs/msg/JointState"
     assert channels["/joint_states"]["encoding"] == "cdr" and channels["/joint_states"]["schemaEncoding"] == "ros2msg"
@@ -182,10 +212,14 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
     assert odom is None or deserialize_message(odom[0], Odometry).header.frame_id == "odom"
 
 
-async def foxglove_client(port: int) -> tuple[dict[str, dict], dict[str, list[bytes]]]:
-    """Connect with the Foxglove protocol, subscribe to every channel, and collect messages
-    until 10 joint states have come: (topic -> channel, topic -> payloads)."""
-    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.sdk.v1"]) as ws:
+async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.sdk.v1",),
+                          wanted: tuple[str, ...] = ("/robot_description", "/diagnostics")
+                          ) -> tuple[dict[str, dict], dict[str, list[bytes]]]:
+    """Connect with the Foxglove protocol offering ``subprotocols``, subscribe to every channel,
+    and collect messages until 10 joint states and one of each ``wanted`` topic have come:
+    (topic -> channel, topic -> payloads)."""
+    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=list(subprotocols)) as ws:
+        assert ws.subprotocol == "foxglove.sdk.v1"
         channels: dict[str, dict] = {}
         while "/joint_states" not in channels:
             message = json.loads(await asyncio.wait_for(ws.recv(), 30.0))
@@ -195,7 +229,7 @@ async def foxglove_client(port: int) -> tuple[dict[str, dict], dict[str, list[by
         await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
             {"id": k, "channelId": channels[topic]["id"]} for k, topic in topics.items()]}))
         received: dict[str, list[bytes]] = {}
-        while len(received.get("/joint_states", [])) < 10 or "/robot_description" not in received:
+        while len(received.get("/joint_states", [])) < 10 or not set(wanted) <= set(received):
             message = await asyncio.wait_for(ws.recv(), 30.0)
             if isinstance(message, bytes) and message[0] == 1:  # message data: op, subscription, log time, payload
                 _, subscription, _ = struct.unpack_from("<BIQ", message)
@@ -207,7 +241,6 @@ def test_live_view_and_recording_switched_at_run_time_and_the_walk_in_diagnostic
     """The parameter services of a walking simulator: the live view started (the robot description
     sent to a client that connects now) and stopped; a recording started (the latched topics first)
     and finished; a read-only parameter refused with its reason; /diagnostics tells the walk."""
-    from diagnostic_msgs.msg import DiagnosticArray
     from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters
 
@@ -234,7 +267,7 @@ def test_live_view_and_recording_switched_at_run_time_and_the_walk_in_diagnostic
         assert set_("live_view", True).successful
         side.wait(lambda: re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text()) is not None, 10.0)
         port = int(re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text()).group(1))
-        channels, shown = asyncio.run(foxglove_client(port))
+        channels, shown = asyncio.run(foxglove_client(port, wanted=("/robot_description",)))
         assert "<robot" in deserialize_message(shown["/robot_description"][0], String).data
         assert set_("live_view", False).successful and "live view stopped" in log.read_text()
         assert set_("record", True).successful

@@ -24,7 +24,9 @@ from biped_gait.cli import main as cli_main
 from biped_gait.recording.recover import is_complete
 from biped_gait.core.model.params import load_params
 from biped_gait.core.walking.steering import DEFAULT_RATE
-from biped_gait.core.walking.walk import PlannedOrbit, Touchdown, Walk
+from biped_gait.core.walking.events import Touchdown
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.walk import Walk
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 

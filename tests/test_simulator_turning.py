@@ -1,7 +1,8 @@
 """The simulator node walking circles over Fast DDS with the 13-DOF set (aoustin2013-hips): a
 full circle from ``turn_radius`` comes back to its start in the recorded /odom; /cmd_vel's
 angular.z turns the walk at the commanded yaw rate after its per-step ramp, a command beyond the
-envelope is clamped with a warning, and the envelope is latched on ~/velocity_envelope."""
+envelope is clamped with a warning, and the envelope is latched on ~/velocity_envelope; the
+tutorial's turn under the default speed rule, at real time."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ import pytest
 pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
 
 import math
+import re
+from collections.abc import Callable
 
 import numpy as np
 from geometry_msgs.msg import Twist, Vector3
@@ -40,6 +43,19 @@ def yaw(orientation) -> float:
     """The heading (rad) of a quaternion (a rotation about the vertical and small tilts)."""
     q = orientation
     return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
+
+
+def turns(where) -> tuple[list[float], Callable[[float], float]]:
+    """The recorded walk under ``where``: its touchdown instants (s) and its heading (rad, unwrapped)
+    at a time, from /odom."""
+    [bag] = list((where / "bags").iterdir())
+    topics = read_bag(bag)
+    odom = [m for _, m in topics["/odom"]]
+    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odom])
+    headings = np.unwrap([yaw(m.pose.pose.orientation) for m in odom])
+    touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
+    return ([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in touchdowns],
+            lambda t: float(headings[np.argmin(np.abs(stamps - t))]))
 
 
 def test_a_circle_from_turn_radius_closes_on_its_start(planner_node, tmp_path):
@@ -102,17 +118,7 @@ def test_cmd_vel_angular_z_turns_the_walk_at_the_commanded_rate(planner_node, tm
     log = (tmp_path / "biped-gait-simulator.log").read_text()
     assert "is outside the envelope" in log and "clamped to 1.000 m/s, 0.500 rad/s" in log
     assert not [e for e in events if e.kind == GaitEvent.FALL]
-    [bag] = list((tmp_path / "bags").iterdir())
-    topics = read_bag(bag)
-    odom = [m for _, m in topics["/odom"]]
-    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odom])
-    headings = np.unwrap([yaw(m.pose.pose.orientation) for m in odom])
-    touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
-    times = [m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in touchdowns]
-
-    def heading_at(t: float) -> float:
-        return float(headings[np.argmin(np.abs(stamps - t))])
-
+    times, heading_at = turns(tmp_path)
     rates = [(heading_at(b) - heading_at(a)) / (b - a) for a, b in zip(times, times[1:])]
     print("\nyaw rate per step from /odom (rad/s): " + " ".join(f"{r:.3f}" for r in rates))
     # The curvature ramps 0.1 1/m per step from the first step: at 0.5 1/m from the fifth
@@ -120,3 +126,36 @@ def test_cmd_vel_angular_z_turns_the_walk_at_the_commanded_rate(planner_node, tm
     steady = (heading_at(times[14]) - heading_at(times[8])) / (times[14] - times[8])
     assert steady == pytest.approx(0.5, rel=0.02)
     assert all(r <= 0.5 * 1.15 for r in rates[:4])  # no faster than the ramp allows
+
+
+def test_the_tutorials_turn_under_the_default_speed_rule(planner_node, tmp_path):
+    """docs/tutorial.md section 5 as written: the 13-DOF set at alpha = 0.349 rad, the default
+    speed rule (least effort per metre), real time, /cmd_vel Twist(1.0, 0.4). The curvature ramps
+    0.1 1/m per step to 0.4 1/m (the period held while turning: the strides of one period), no
+    transition fails or is retried, and the recorded heading turns at 0.4 rad/s. The walk's
+    real-time factor is printed (it was 1/20 when the rule picked a stride it could not reach
+    and tried it again at every step)."""
+    side = ClientSide("tutorial_turn_client")
+    try:
+        node = side.node
+        pub = node.create_publisher(Twist, "/cmd_vel", 10)
+        node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+        timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=1.0), angular=Vector3(z=0.4))))
+        proc = start_simulator(tmp_path, PLANNER, "steps:=14", "exit_when_done:=true", "params:=aoustin2013-hips",
+                               "arm_amplitude:=0.349", "wait_for_subscribers:=1")
+        side.wait(lambda: proc.poll() is not None, 300.0)  # spinning: the commands go on
+        timer.cancel()
+    finally:
+        side.close()
+    log = (tmp_path / "biped-gait-simulator.log").read_text()
+    assert proc.returncode == 0, log
+    assert "speed command: least effort per metre" in log and "no transition" not in log, log
+    rtf = float(re.search(r"real-time factor ([\d.]+)\)", log).group(1))
+    times, heading_at = turns(tmp_path)
+    rates = [(heading_at(b) - heading_at(a)) / (b - a) for a, b in zip(times, times[1:])]
+    print(f"\nyaw rate per step from /odom (rad/s): {' '.join(f'{r:.3f}' for r in rates)}; the walk's real-time "
+          f"factor {rtf:.2f} (paced at 1)")
+    assert len(times) == 14
+    steady = (heading_at(times[13]) - heading_at(times[7])) / (times[13] - times[7])  # three strides at 0.4 1/m
+    assert steady == pytest.approx(0.4, rel=0.02)
+    assert all(r <= 0.4 * 1.15 for r in rates[:4])  # no faster than the ramp allows

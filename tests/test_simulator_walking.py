@@ -18,7 +18,7 @@ from geometry_msgs.msg import Twist, Vector3
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
-from biped_gait.core.walking.walk import PlannedOrbit
+from biped_gait.core.walking.orbit import PlannedOrbit
 from biped_gait.ros.client import ClientSide
 from biped_gait.studies.push_study import PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, STUDY_DIRECTIONS, largest_push
 from biped_gait_interfaces.msg import GaitEvent, GaitPhase

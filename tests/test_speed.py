@@ -19,7 +19,8 @@ from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.walking.speed import MAX_SLOPE, FixedCadence, LeastEffort, walkable_nodes
 from biped_gait.core.walking.transitions import SpeedFollower
-from biped_gait.core.walking.walk import PlannedOrbit, Walker
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
 from biped_gait.studies.atlas_build import build_atlas
 
 pytestmark = pytest.mark.core

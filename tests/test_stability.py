@@ -11,7 +11,8 @@ import pytest
 
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.gait.stability import PoincareMap, closed_loop, multipliers_of, open_loop
-from biped_gait.core.walking.walk import PlannedOrbit, Walker
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
 
 pytestmark = pytest.mark.core
 

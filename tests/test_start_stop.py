@@ -16,7 +16,7 @@ from biped_gait.core.dynamics.impulses import EffortOptions
 from biped_gait.core.walking import start_stop
 from biped_gait.core.walking.start_stop import StartStopError, com_friction, double_support, plan_start, plan_stop
 from biped_gait.core.walking.steering import momentum_row
-from biped_gait.core.walking.walk import PlannedOrbit
+from biped_gait.core.walking.orbit import PlannedOrbit
 
 pytestmark = pytest.mark.core
 

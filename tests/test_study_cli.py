@@ -50,7 +50,7 @@ def test_sweep_writes_csv_json_and_figures(tmp_path):
         (["optimize-arms", "--alpha-deg-range", "30", "10", "1.5"], "arm amplitude range is empty or inverted: [30, 10] deg"),
         (["optimize-arms", "--alpha-deg-range", "0", "45", "0"], "arm amplitude range step must be positive, got 0"),
         (["optimize-arms", "--friction-margin", "0.6"], "friction margin must be in [0, 0.5)"),
-        (["plan", "--friction", "0"], "friction coefficient 0 is a frictionless floor"),
+        (["plan", "--friction", "-0.5"], "friction coefficient must be positive (or inf), got -0.5"),
         (["plan", "--min-clearance", "-0.001"], "swing clearance margin must be 0 (none) or positive"),
         (["optimize-arms", "--mode", "hop"], "argument --mode: invalid choice: 'hop'"),
         (["figure", "fig6"], "argument name: invalid choice: 'fig6'"),

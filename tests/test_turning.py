@@ -12,7 +12,8 @@ import pytest
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.model.exchange import next_heading
 from biped_gait.core.walking.push import Push
-from biped_gait.core.walking.walk import PlannedOrbit, Walker
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
 
 pytestmark = pytest.mark.core
 

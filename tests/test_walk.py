@@ -10,7 +10,10 @@ import pytest
 
 from biped_gait.core.dynamics.hybrid import TouchdownGuard
 from biped_gait.core.gait.planner import GaitRequest
-from biped_gait.core.walking.walk import PlannedOrbit, Sample, StepSamples, Walk, Walker
+from biped_gait.core.walking.events import Sample, StepSamples
+from biped_gait.core.walking.orbit import PlannedOrbit
+from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 pytestmark = pytest.mark.core
 

@@ -9,6 +9,7 @@ momentum in kg m^2/s.
 from __future__ import annotations
 
 import math
+import statistics
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -85,6 +86,8 @@ def walk_summary(walk: Walk) -> dict:
         "effort_cost_per_step": efforts,
         "total_effort_cost": sum(efforts),
         "max_state_error": max((s["state_error"] for s in steps), default=None),
+        "median_state_error": statistics.median(s["state_error"] for s in steps) if steps else None,
+        "max_state_error_step": max(steps, key=lambda s: s["state_error"])["step"] if steps else None,
         "max_velocity_miss": max((s["velocity_miss"] for s in steps), default=None),
         "per_step": steps,
         "pushes": [{"step": e.step, "time": t, "time_in_step": e.time_in_step, "message": e.message}
@@ -143,8 +146,10 @@ def _walk_lines(walk: dict) -> list[str]:
     if walk["steps"]:
         efforts = ", ".join(f"{w:.3f}" for w in walk["effort_cost_per_step"])
         lines.append(f"  W per step (N m s): {efforts} (total {walk['total_effort_cost']:.3f})")
-        lines.append(f"  drift from the plan: state error max {walk['max_state_error']:.3g} (rad, rad/s), "
-                     f"velocity miss max {walk['max_velocity_miss']:.3g} rad/s")
+        lines.append(f"  touchdowns against the gait each step aimed at (the plan, or a transition's gait): state "
+                     f"error (the larger of the joint angles' error in rad and the joint rates' in rad/s) median "
+                     f"{walk['median_state_error']:.3g}, largest {walk['max_state_error']:.3g} (step "
+                     f"{walk['max_state_error_step']}); unreachable velocity at most {walk['max_velocity_miss']:.3g} rad/s")
     lines += [f"  {p['message']}" for p in walk["pushes"]]
     falls = [f"  fall in step {f['step']} at {f['time']:.3f} s: {f['message']}" for f in walk["falls"]]
     lines += falls or ["  falls: none"]
@@ -178,7 +183,7 @@ def markdown_report(summary: dict) -> str:
     walk = summary["walk"]
     if walk and walk["per_step"]:
         lines += ["## Steps", "",
-                  "| step | touchdown (s) | time in step (s) | W (N m s) | state error | velocity miss (rad/s) |",
+                  "| step | touchdown (s) | time in step (s) | W (N m s) | state error (rad or rad/s) | velocity miss (rad/s) |",
                   "|---:|---:|---:|---:|---:|---:|"]
         lines += [f"| {s['step']} | {s['touchdown_time']:.4f} | {s['time_in_step']:.4f} | {s['effort_cost']:.4f} | "
                   f"{s['state_error']:.3g} | {s['velocity_miss']:.3g} |" for s in walk["per_step"]]

@@ -21,7 +21,10 @@ TF_STATIC = "/tf_static"
 GAIT_PHASE = "/gait_phase"
 CMD_VEL = "/cmd_vel"  # subscribed: the commanded walking speed and turn
 VELOCITY_ENVELOPE = "~/velocity_envelope"  # the simulator's: the commands it walks (latched)
-CLOCK = "/clock"
+CLOCK = "/clock"  # published, not recorded (ros/sim_clock.py)
+ITERATIONS = "~/iterations"  # the simulator's step counter (latched)
+
+RECORD_DIR = "bags"  # the nodes' default record_dir
 
 GAIT_PLAN_TYPE = "biped_gait_interfaces/msg/GaitPlan"
 PLAN_CALL_TYPE = "biped_gait_interfaces/msg/PlanGaitCall"

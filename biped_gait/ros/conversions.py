@@ -24,7 +24,7 @@ from ..core.dynamics.impulses import EffortOptions
 from ..core.gait.planner import GaitRequest
 from ..core.model.biped import BipedModel
 from ..core.model.urdf import UrdfJoints
-from ..core.walking.walk import PlannedOrbit
+from ..core.walking.orbit import PlannedOrbit
 from ..recording.topics import MODE_CODES
 
 MODE_TO_MSG = {mode: code for code, mode in MODE_CODES.items()}

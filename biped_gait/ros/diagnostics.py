@@ -4,7 +4,9 @@ part, published every ``PERIOD`` s of wall time from the part's own report (leve
 key/value figures), and at once when asked (``publish``).
 
 Reports are functions of the node, called on the timer's thread: they read figures the node
-keeps under its own locks. Not recorded (a bag of a walk holds the walk).
+keeps under its own locks. Published through the node's recorded publisher, so that a
+recording holds the node's health beside what it did (a replay shows it), stamped by the
+node's own time (the simulator's: its simulated time).
 """
 
 from __future__ import annotations
@@ -14,12 +16,17 @@ import threading
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
+from rclpy.time import Time
 from std_msgs.msg import Header
+
+if TYPE_CHECKING:
+    from .recorded import RecordedPublisher
 
 TOPIC = "/diagnostics"
 PERIOD = 1.0  # s of wall time between two reports (ROS's diagnostic_updater's default)
@@ -39,13 +46,16 @@ class Report:
 
 
 class Diagnostics:
-    """Publishes the ``reports`` of ``node`` (part name -> function giving its ``Report``) on
-    ``/diagnostics`` every ``PERIOD`` s, in ``group`` (default: the node's)."""
+    """Publishes (and records) the ``reports`` of ``node`` (part name -> function giving its
+    ``Report``) with ``publisher`` (a ``RecordedPublisher`` of ``TOPIC``) every ``PERIOD`` s, in
+    ``group`` (default: the node's), stamped ``now_ns()`` (ns; default: the node's clock)."""
 
-    def __init__(self, node: Node, reports: Mapping[str, Callable[[], Report]], group: CallbackGroup | None = None):
+    def __init__(self, node: Node, reports: Mapping[str, Callable[[], Report]], publisher: "RecordedPublisher",
+                 group: CallbackGroup | None = None, now_ns: Callable[[], int] | None = None):
         self._node = node
         self._reports = dict(reports)
-        self._publisher = node.create_publisher(DiagnosticArray, TOPIC, QOS)
+        self._publisher = publisher
+        self._now_ns = now_ns or (lambda: node.get_clock().now().nanoseconds)
         self._timer = node.create_timer(PERIOD, self.publish, callback_group=group)
 
     def statuses(self) -> list[DiagnosticStatus]:
@@ -60,8 +70,9 @@ class Diagnostics:
 
     def publish(self) -> None:
         """Publish every part's status now."""
-        header = Header(stamp=self._node.get_clock().now().to_msg())
-        self._publisher.publish(DiagnosticArray(header=header, status=self.statuses()))
+        stamp_ns = self._now_ns()
+        self._publisher.publish(DiagnosticArray(header=Header(stamp=Time(nanoseconds=stamp_ns).to_msg()), status=self.statuses()),
+                                stamp_ns)
 
 
 def _text(value: object) -> str:

@@ -1,7 +1,7 @@
 """The simulator's gait phase topic (biped_gait_interfaces/GaitPhase, after the convention of
-biped_interfaces/Phase): published when a phase begins, i.e. at a step's first sample (the
-stance foot of its single support) and at each touchdown (the instantaneous double support).
-No physics here."""
+biped_interfaces/Phase): published when a phase begins, i.e. at the first sample of a step's
+phase (the stance foot of a single support, both feet of a double support that lasts) and at each
+touchdown (the instantaneous double support). No physics here."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from std_msgs.msg import Header
 
 from biped_gait_interfaces.msg import GaitPhase
 
+from ..core.walking.events import SINGLE_SUPPORT
 from ..core.walking.world import WORLD_FRAME
 from .walk_messages import stamp_msg
 
@@ -21,21 +22,23 @@ class GaitPhases:
 
     def __init__(self, publisher) -> None:
         self.publisher = publisher
-        self._step: int | None = None
+        self._phase: tuple[int, int] | None = None  # the step and phase published last
 
     def restart(self) -> None:
         """A new walk begins (a reset): its first sample begins a phase whatever its step."""
-        self._step = None
+        self._phase = None
 
-    def sample(self, step: int, stance_side: str, t: float, start_ns: int) -> None:
-        """A sample of ``step`` at ``t`` (s in the walk): its single support begins if it is the
-        step's first."""
-        if step != self._step:
-            self._step = step
-            self._publish(STANCE[stance_side], step, t, start_ns)
+    def sample(self, step: int, stance_side: str, kind: str, t: float, start_ns: int) -> None:
+        """A sample of ``step`` at ``t`` (s in the walk), of a phase of ``kind``
+        (``events.PHASE_KINDS``): that phase begins if it is its first."""
+        phase = GaitPhase.DOUBLE_STANCE if kind != SINGLE_SUPPORT else STANCE[stance_side]
+        if (step, phase) != self._phase:
+            self._phase = (step, phase)
+            self._publish(phase, step, t, start_ns)
 
     def touchdown(self, step: int, t: float, start_ns: int) -> None:
         """``step`` ends at ``t`` (s in the walk) with the double support."""
+        self._phase = (step, GaitPhase.DOUBLE_STANCE)
         self._publish(GaitPhase.DOUBLE_STANCE, step, t, start_ns)
 
     def _publish(self, phase: int, step: int, t: float, start_ns: int) -> None:

@@ -8,6 +8,8 @@ says otherwise, so a walk of ``steps`` steps ends the launch. Ctrl-C and SIGTERM
 to both; when the simulator ends, the planner is stopped, and when the planner ends, the
 simulator is. Exit status: 0 if both ended cleanly, 130 after Ctrl-C or SIGTERM, else the first
 non-zero status. ``--analyze`` then runs ``biped-gait-analyze`` on the new walk recording.
+``--record-dir DIR`` has both nodes record under DIR (their ``record_dir``, over the file's);
+without it they record where the file says (else ``bags``), and ``--analyze`` looks there.
 ``--live-view [PORT]`` has the simulator serve a Foxglove live view (``live_view``) on that port.
 """
 
@@ -23,9 +25,10 @@ import time
 from pathlib import Path
 
 from ..arguments import OneLineParser
+from ..recording import topics
 from .environment import DISCOVERY_VARIABLE
 from .live_view import DEFAULT_PORT
-from .parameters import check_parameters_file
+from .parameters import PARAMS_KEY, check_parameters_file
 
 PLANNER, SIMULATOR = "biped-gait-planner", "biped-gait-simulator"
 
@@ -35,8 +38,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--config", type=Path, help="ROS 2 parameters file with biped_gait_planner and "
                         "biped_gait_simulator sections (default: the nodes' own defaults)")
     parser.add_argument("--analyze", action="store_true", help="analyse the simulator's recording afterwards")
-    parser.add_argument("--record-dir", type=Path, default=Path("bags"),
-                        help="where the simulator records (to find the new recording for --analyze)")
+    parser.add_argument("--record-dir", type=Path, metavar="DIR",
+                        help="both nodes record under DIR (their record_dir parameter, over the config's); default: "
+                        "the config's simulator record_dir, else bags")
     parser.add_argument("--live-view", type=int, nargs="?", const=DEFAULT_PORT, metavar="PORT",
                         help="the simulator serves a Foxglove live view on ws://127.0.0.1:PORT "
                         f"(default {DEFAULT_PORT})")
@@ -81,24 +85,29 @@ def main(argv: list[str] | None = None) -> int:
         print(f"biped-gait-launch: error: no config file {args.config}", file=sys.stderr)
         return 2
     try:
-        if args.config is not None:
-            check_parameters_file(args.config)
+        document = check_parameters_file(args.config) if args.config is not None else {}
     except ValueError as exc:
         print(f"biped-gait-launch: error: {exc}", file=sys.stderr)
         return 2
     os.environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
-    before = set(args.record_dir.glob("walk_*")) if args.record_dir.is_dir() else set()
+    sections = {node.strip("/"): section.get(PARAMS_KEY, {}) for node, section in document.items()}
+    record_dir = args.record_dir or Path(str(sections.get("biped_gait_simulator", {}).get("record_dir",
+                                                                                        topics.RECORD_DIR)))
+    before = set(record_dir.glob("walk_*")) if record_dir.is_dir() else set()
     stopping = []
 
     def forward(signum, _frame) -> None:
         stopping.append(signum)
 
     previous = {sig: signal.signal(sig, forward) for sig in (signal.SIGINT, signal.SIGTERM)}
+    # -p after the file wins over it (rcl: a -p before it would lose even when after it): the options
+    # over the file's values; the launcher's exit_when_done only where the file does not set it
     ros_args = ["--params-file", str(args.config)] if args.config else []
-    planner = start_entry(PLANNER, ros_args, own_session=True)
-    # the file's own exit_when_done, if any, comes later and wins
+    recording = ["-p", f"record_dir:={args.record_dir}"] if args.record_dir is not None else []
+    planner = start_entry(PLANNER, [*ros_args, *recording], own_session=True)
+    ending = [] if "exit_when_done" in sections.get("biped_gait_simulator", {}) else ["-p", "exit_when_done:=true"]
     live = [] if args.live_view is None else ["-p", "live_view:=true", "-p", f"live_view_port:={args.live_view}"]
-    simulator = start_entry(SIMULATOR, ["-p", "exit_when_done:=true", *live, *ros_args], own_session=True)
+    simulator = start_entry(SIMULATOR, [*ros_args, *ending, *live, *recording], own_session=True)
     try:
         while simulator.poll() is None and planner.poll() is None and not stopping:
             time.sleep(0.05)
@@ -115,7 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     if stopping:
         return 130
     if args.analyze:
-        new = sorted(set(args.record_dir.glob("walk_*")) - before)
+        new = sorted(set(record_dir.glob("walk_*")) - before)
         if not new:
             print("biped-gait-launch: error: the simulator left no new recording to analyse", file=sys.stderr)
             return 1

@@ -10,6 +10,12 @@ to each client that subscribes to them, as a late ROS subscriber would get them.
 binds ``127.0.0.1`` unless told otherwise; it runs on threads of its own (Rust), and logging a
 message to a channel nobody subscribes to costs next to nothing. The SDK is imported when a live
 view starts: the nodes that show nothing do not load it (nor its runtime's exit hook).
+
+The handshake is the SDK's own: it selects the subprotocol ``foxglove.sdk.v1`` (or
+``foxglove.sdk.v1.1``) and refuses with HTTP 400 a client that offers only the older name of the
+same protocol, ``foxglove.websocket.v1`` (foxglove-sdk 0.30.3 has no option for it: its
+``start_server`` takes none, its handshake hard-codes the name). docs/ros.md says which clients
+connect.
 """
 
 from __future__ import annotations

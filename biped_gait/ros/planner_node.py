@@ -5,11 +5,12 @@
   amplitude of least effort, with feedback per amplitude evaluated; cancelable;
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
   transient-local, depth 1, so a late subscriber gets the latest one;
-- recording (parameter ``record``): every request with its response (PlanGaitCall messages on
-  ``~/plan_gait/calls``) and every published plan, to MCAP under ``record_dir``, by a writer
-  thread: an exchange is queued as it is answered and serialized and written off the request path;
 - ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, every second): requests, solves and their
-  times, cache hits, refusals, optimizations, the recording.
+  times, cache hits, refusals, optimizations, the recording;
+- recording (parameter ``record``): every request with its response (PlanGaitCall messages on
+  ``~/plan_gait/calls``), every published plan and ``/diagnostics``, to MCAP under
+  ``record_dir``, by a writer thread: an exchange is queued as it is answered and serialized and
+  written off the request path.
 
 A thin node: requests and goals carry the gait vocabulary (``biped_gait.gait_options``: the
 same fields, units and meanings as the command line's options), converted and handed to the
@@ -42,6 +43,7 @@ import rclpy.logging  # after a signal, a logger of no node: rosout is gone with
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.qos import QoSProfile
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory
@@ -50,15 +52,17 @@ from biped_gait_interfaces.action import OptimizeArmSwing
 from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
-from ..core.model.params import DEFAULT_PARAMS, load_params, shipped_param_names
+from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_param_names
 from ..core.gait.planner import SEED, GaitPlanner, GaitRequest
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.text import clip
+from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import OPTION_NAMES, POINT_NAMES, gait_fields, plan_msg, request_key, stride_msgs, urdf_joints
 from .diagnostics import OK, WARN, Counters, Diagnostics, Report
+from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .parameters import Param, declare
 from .process import Usage, run_node
 from .qos import EVENTS, LATCHED
@@ -71,7 +75,8 @@ CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes
 GROUPS = ("service", "action")  # who owns a planner: the service's callbacks, the action's
 PARAMETERS = (
     Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
-          f"{', '.join(shipped_param_names())} or the path of a YAML file"),
+          f"{', '.join(shipped_param_names())} or the path of a YAML file (which requests may name by its path or "
+          "by the name inside it)"),
     Param("bvp_tolerance", DEFAULTS.tolerance, "bound on the BVP end-point residual (rad) and closure gap "
           "(kg m^2/s)", 1e-14, 1e-6),
     Param("max_iterations", DEFAULTS.max_iterations, "Newton iterations allowed per solve (count)", 1, 200),
@@ -81,9 +86,9 @@ PARAMETERS = (
           dynamic=True),
     Param("queue_depth", 1000, "requests each service and the action keep waiting (count): a burst beyond "
           "this is dropped by the middleware", 10, 100000),
-    Param("record", True, "record requests, responses and plans to MCAP (true/false; at run time: false finishes "
-          "the recording, true starts a new one)", dynamic=True),
-    Param("record_dir", "bags", "directory of the recordings (path)"),
+    Param("record", True, "record requests, responses, plans and /diagnostics to MCAP (true/false; at run time: "
+          "false finishes the recording, true starts a new one)", dynamic=True),
+    Param("record_dir", topics.RECORD_DIR, "directory of the recordings (path)"),
 )
 
 
@@ -143,7 +148,7 @@ class GaitPlannerNode(Node):
         self._recordings: list[RecordedPublisher] = []
         value = declare(self, PARAMETERS, self._on_parameter)
         self._default_params = value["default_params"]
-        load_params(self._default_params)  # refuse to start on a bad default, with its message
+        self._default_set = load_params(self._default_params)  # refuse to start on a bad default, with its message
         self._planners: dict[tuple[str, str], GaitPlanner] = {}
         self._cache_size = value["cache_size"]
         self._sequence = 0
@@ -156,7 +161,8 @@ class GaitPlannerNode(Node):
         self._record_dir = value["record_dir"]
         self.plan_publisher = RecordedPublisher(self, GaitPlan, "~/gait_plan", LATCHED, None)
         self.call_recorder = RecordedPublisher(self, PlanGaitCall, "~/plan_gait/calls", EVENTS, None, publish=False)
-        self._recordings = [self.plan_publisher, self.call_recorder]
+        health = RecordedPublisher(self, DiagnosticArray, DIAGNOSTICS_TOPIC, DIAGNOSTICS_QOS, None)
+        self._recordings = [self.plan_publisher, self.call_recorder, health]
         self._prepared = {group: threading.Event() for group in GROUPS}
         threading.Thread(target=self._prepare, name="prepare_planners", daemon=True).start()
         if value["record"]:
@@ -187,7 +193,7 @@ class GaitPlannerNode(Node):
             result_service_qos_profile=queue,
             cancel_service_qos_profile=queue,
         )
-        self.diagnostics = Diagnostics(self, {"planning": self._report})
+        self.diagnostics = Diagnostics(self, {"planning": self._report}, health)
 
     # Run-time parameters and recording ------------------------------------------------------
     def _on_parameter(self, name: str, value: object) -> None:
@@ -248,6 +254,15 @@ class GaitPlannerNode(Node):
             finally:
                 self._prepared[group].set()
 
+    def _fields(self, msg, names: tuple[str, ...]) -> dict[str, object]:
+        """The ``GaitRequest`` fields ``names`` of a request or goal, its ``params`` the default
+        set's as given (``default_params``) whenever it names that set: empty, by its name or by
+        its file's path (``names_set``), so that one set is one planner and one cache entry."""
+        fields = gait_fields(msg, self._default_params, names)
+        if names_set(fields["params"], self._default_set, self._default_params):
+            fields["params"] = self._default_params
+        return fields
+
     def _planner(self, params: str, group: str) -> GaitPlanner:
         """The planner of ``group`` for parameter set ``params`` (the default set's made at
         start-up, ``_prepare``: waited for; any other on first use)."""
@@ -288,7 +303,7 @@ class GaitPlannerNode(Node):
         """Answer from the cache (the first answer's success and message, marked cached), else
         plan: ``success`` only for an admissible gait; otherwise the reasons (a gait that misses
         only the margins says so) and, when the atlas knows, where the nearest admissible gaits are."""
-        fields = gait_fields(request, self._default_params, (*POINT_NAMES, *OPTION_NAMES))
+        fields = self._fields(request, (*POINT_NAMES, *OPTION_NAMES))
         key = request_key(fields)
         cached = self._cached(self._cache, key)
         if cached is not None:
@@ -377,7 +392,7 @@ class GaitPlannerNode(Node):
         goal = goal_handle.request
         self.stats.count("optimizations")
         try:
-            fields = gait_fields(goal, self._default_params, (*GOAL_NAMES, *OPTION_NAMES))
+            fields = self._fields(goal, (*GOAL_NAMES, *OPTION_NAMES))
         except ValueError as exc:
             return self._refuse_goal(goal_handle, OptimizeArmSwing.Result(message=clip(str(exc))))
         key = request_key(fields)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.walking.push import Push
-from ..core.walking.walk import Walker
+from ..core.walking.runner import Walker
 
 SCRIPT_FORMAT = "STEP PHASE PX PY PZ, groups separated by ';'"
 

@@ -1,7 +1,8 @@
 """The simulation's controls, as Gazebo offers them: ``~/pause``, ``~/resume`` and ``~/reset``
 (std_srvs/Trigger), and ``~/iterations`` (std_msgs/UInt64), the step counter: the simulation
 steps made (one per sample, 1 / ``publish_rate`` s of simulated time each) since the node
-started, published at ``PERIOD`` s of wall time when it changed and at once on a pause or reset.
+started, published (and recorded, stamped with the simulated time) at ``PERIOD`` s of wall
+time when it changed and at once on a pause or reset.
 
 A pause holds the walk before its next sample (simulated time stands still and the pacing
 resumes where it stopped); a reset puts the robot back at the plan's start, its first stance
@@ -12,22 +13,27 @@ walks the plan again, also after a walk that ended (finished or fell) when the n
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from rclpy.callback_groups import CallbackGroup
 from rclpy.node import Node
 from std_msgs.msg import UInt64
 from std_srvs.srv import Trigger
 
-from .qos import LATCHED
+if TYPE_CHECKING:
+    from .recorded import RecordedPublisher
 
 PERIOD = 0.1  # s of wall time between publications of a changed counter
 HOLD_POLL = 0.05  # s: how often a held walk checks for a stop
 
 
 class SimControls:
-    """Pause, resume and reset requests for the walk's thread, and the step counter."""
+    """Pause, resume and reset requests for the walk's thread, and the step counter, published
+    with ``counter`` (a latched ``RecordedPublisher`` of ``~/iterations``) stamped ``now_ns()``."""
 
-    def __init__(self, node: Node, group: CallbackGroup) -> None:
+    def __init__(self, node: Node, group: CallbackGroup, counter: "RecordedPublisher",
+                 now_ns: Callable[[], int]) -> None:
         self._running = threading.Event()
         self._running.set()
         self._reset = threading.Event()
@@ -35,7 +41,7 @@ class SimControls:
         self.iterations = 0  # simulation steps made (the walk's thread counts them)
         self._published = -1
         self.can_reset = False  # a walk has begun: there is something to reset
-        self._counter = node.create_publisher(UInt64, "~/iterations", LATCHED)
+        self._counter, self._now_ns = counter, now_ns
         node.create_service(Trigger, "~/pause", self._on_pause, callback_group=group)
         node.create_service(Trigger, "~/resume", self._on_resume, callback_group=group)
         node.create_service(Trigger, "~/reset", self._on_reset, callback_group=group)
@@ -99,4 +105,4 @@ class SimControls:
             if count == self._published:
                 return
             self._published = count
-        self._counter.publish(UInt64(data=count))
+        self._counter.publish(UInt64(data=count), self._now_ns())

@@ -18,10 +18,11 @@ names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/ang
 supports), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
 ``/robot_description`` (std_msgs/String) and ``/tf_static``. The recording (MCAP, rosbag2
 directory under ``record_dir``, handed over by a thread to a recorder process of its own) holds
-the same bytes as were published, and so does the optional Foxglove live view
-(``live_view``). Each step's samples come from the walk as arrays and their messages
-are serialized at once (``walk_messages``). Controls: ``~/pause``, ``~/resume``, ``~/reset`` and
-the step counter ``~/iterations`` (``sim_controls``).
+the same bytes as were published, of every topic but ``/clock`` (``sim_clock``), and so does
+the optional Foxglove live view (``live_view``). Each step's samples come from the walk as
+arrays and their messages are serialized at once (``walk_messages``). Controls: ``~/pause``,
+``~/resume``, ``~/reset`` and the step counter ``~/iterations`` (``sim_controls``). Every stamp
+and log time is on one clock, the simulated time (``SimClock.now_ns``).
 
 Starting and stopping: with ``start_from_rest`` the walk would begin standing, through a start
 step planned by the core (``start_stop``); ``/cmd_vel`` linear.x 0 asks it to stop. The core
@@ -32,7 +33,8 @@ slowest gait.
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: ``engine``
 ``hybrid`` (the planner's model) or ``mujoco`` (MuJoCo, the double support as torque pulses of
-``pulse_duration``; ``core/walking/mujoco_engine.py``): the same topics, events and recording.
+``pulse_duration``; ``core/walking/engines/mujoco.py``, ``core/walking/phases/pulses.py``): the same
+topics, events and recording.
 Speed and turn: ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in
 rad/s), walked with transition steps within the envelope published on ``~/velocity_envelope``
 (biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
@@ -65,6 +67,7 @@ from . import environment  # noqa: F401  (before rclpy: keep discovery local)
 
 import rclpy.logging  # after a signal, a logger of no node: rosout is gone with the context
 
+from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
 import numpy as np
 from rclpy.action import ActionClient
@@ -72,7 +75,7 @@ from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from nav_msgs.msg import Odometry
-from std_msgs.msg import String
+from std_msgs.msg import String, UInt64
 from tf2_msgs.msg import TFMessage
 
 from biped_gait_interfaces.action import OptimizeArmSwing
@@ -83,21 +86,24 @@ from ..core.gait.configurations import GaitMode
 from ..core.gait.planner import GaitRequest, validate_request
 from ..gait_options import OPTIONS, POINT, GaitOption, resolve_unset
 from ..core.walking.pacing import Pacer
-from ..core.model.params import load_params, shipped_param_names
+from ..core.model.params import load_params, names_set, shipped_param_names
 from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
 from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
-from ..core.walking.walk import (ENGINES, PULSE_DURATION, CouldNotStart, Fell, Finished, PlannedOrbit, StepSamples,
-                                 Touchdown, Walk, prepare_walking)
+from ..core.walking.events import CouldNotStart, Fell, Finished, StepSamples, Touchdown
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import prepare_walking
+from ..core.walking.walk import ENGINES, PULSE_DURATION, Walk
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
 from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError, SampleRows
 from .conversions import MODE_TO_MSG, orbit_from_msg
 from .diagnostics import ERROR, OK, WARN, Counters, Diagnostics, Report
+from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .gait_phase import GaitPhases
 from .live_view import DEFAULT_PORT, LiveView
 from .parameters import Param, declare
@@ -164,9 +170,9 @@ PARAMETERS = (
           "turn radius at least its inverse; models with hip roll and yaw joints)", 0.0, 2.0),
     Param("max_curvature_change", MAX_CURVATURE_CHANGE, "largest change of the walked gait's curvature per step (1/m)",
           0.001, 2.0),
-    Param("record", True, "record everything published to MCAP (true/false; at run time: false finishes the "
-          "recording, true starts a new one, the latched topics first)", dynamic=True),
-    Param("record_dir", "bags", "directory of the recordings (path)"),
+    Param("record", True, "record everything published but /clock to MCAP (true/false; at run time: false "
+          "finishes the recording, true starts a new one, the latched topics first)", dynamic=True),
+    Param("record_dir", topics.RECORD_DIR, "directory of the recordings (path)"),
     Param("chunk_size", DEFAULT_CHUNK_SIZE, "MCAP chunk size (bytes): at most this much is lost if the process is "
           "killed", 1024, 64 * 1024 * 1024),
     Param("exit_when_done", False, "end the process when the walk ends (true/false; the launcher sets it)"),
@@ -210,7 +216,7 @@ class SimulatorNode(Node):
         self.rtf = value["real_time_factor"]
         self.steps = value["steps"]
         self._own_params = value["params"]
-        self._own_params_name = load_params(self._own_params).name if self._own_params else ""
+        self._own_set = load_params(self._own_params) if self._own_params else None
         self._group = ReentrantCallbackGroup()
         self._latest_plan: GaitPlan | None = None
         self._plan_ready = threading.Event()
@@ -248,14 +254,16 @@ class SimulatorNode(Node):
         self.sampled = {topics.JOINT_STATES: self.pub_joints, topics.ODOM: self.pub_odom,
                         topics.ANGULAR_MOMENTUM: self.pub_momentum, topics.TF: self.pub_tf}
         self.clock = SimClock(self)
-        self.controls = SimControls(self, self._group)
+        self.controls = SimControls(self, self._group, publisher(UInt64, topics.ITERATIONS, LATCHED), self.clock.now_ns)
         self._messages: SampleMessages | None = None  # the sampled topics' templates, made with the first walk
         self._actuated: tuple[str, ...] = ()  # the walked model's actuated joints: the events' impulses
         if self.source == "topic":
             self.create_subscription(GaitPlan, value["plan_topic"], self._on_plan, LATCHED, callback_group=self._group)
         self.plan_client = self.create_client(PlanGait, value["plan_service"], callback_group=self._group)
         self.optimize_client = ActionClient(self, OptimizeArmSwing, value["optimize_action"], callback_group=self._group)
-        self.diagnostics = Diagnostics(self, {"walk": self._report}, self._group)
+        self.diagnostics = Diagnostics(self, {"walk": self._report}, publisher(DiagnosticArray, DIAGNOSTICS_TOPIC,
+                                                                               DIAGNOSTICS_QOS), self._group,
+                                       self.clock.now_ns)
         self._worker = threading.Thread(target=self._run, name="walker", daemon=True)
         self._worker.start()
 
@@ -405,7 +413,7 @@ class SimulatorNode(Node):
         """The parameter set to walk a plan with, from the plan's ``params`` field: a shipped
         set, or this node's own ``params`` file (named by its path or by the name inside it),
         never another path from the wire; ``NoPlan`` otherwise. '' is the default set."""
-        if self._own_params and name in (self._own_params, self._own_params_name):
+        if self._own_set is not None and name and names_set(name, self._own_set, self._own_params):
             return self._own_params
         if name == "" or name in shipped_param_names():
             return name
@@ -462,8 +470,10 @@ class SimulatorNode(Node):
         self.failed = True
         self.walk_state = "not started"
         self.get_logger().error(f"the walk did not start: {clip(reason, 1000)}")
-        stamp = stamp_msg(self.get_clock().now().nanoseconds)
-        self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp, clip(reason, 1000)))
+        stamp_ns = self.clock.now_ns()
+        self.pub_events.publish(event_msg(GaitEvent.NOT_STARTED, 0, "", 0.0, stamp_msg(stamp_ns), clip(reason, 1000)),
+                                stamp_ns)
+        self.diagnostics.publish()  # the walk's end, at once
 
     def _walk(self, plans: list[GaitPlan], params: str) -> None:
         """Walk the gait of ``plans`` (its steps), and again from its start after each reset, until
@@ -522,13 +532,13 @@ class SimulatorNode(Node):
             self._not_started("cannot start from rest: " + why_not("start", walk.walker.hybrid, walk.walker.orbit,
                                                                     walk.walker.grid))
             return True
+        offset = self.controls.iterations / self.rate  # s of simulated time before this walk
+        base_ns = start_ns + round(offset * 1e9)  # the walk's t = 0
         if walk.walker is not None:
-            self.speed.start(walk.walker, orbit[0].params or None)
+            self.speed.start(walk.walker, orbit[0].params or None, base_ns)
             self.pushes.start()
             self.phases.restart()
         pacer.delay(time.monotonic() - held)  # the pacing starts with the walk's first sample
-        offset = self.controls.iterations / self.rate  # s of simulated time before this walk
-        base_ns = start_ns + round(offset * 1e9)  # the walk's t = 0
         if walk.world is not None and not self.controls.can_reset:  # the first walk: the latched topics
             self.pub_description.publish(String(data=walk.world.urdf), base_ns)
             self.pub_tf_static.publish(tf_msg(walk.world.static_transforms(), stamp_msg(base_ns)), base_ns)
@@ -553,6 +563,7 @@ class SimulatorNode(Node):
                 self.stats.count("falls")
                 self.get_logger().error(f"the robot fell in step {item.step}: {item.reason}")
                 self._event(GaitEvent.FALL, item.step, item.stance_side, item.time_in_step, base_ns, item.t, item.reason)
+                self.diagnostics.publish()
             elif isinstance(item, Finished):
                 self.walk_state = "finished"
                 self._event(GaitEvent.FINISHED, item.steps, item.stance_side, 0.0, base_ns, item.t,
@@ -560,6 +571,7 @@ class SimulatorNode(Node):
                 wall = pacer.elapsed()
                 self.get_logger().info(f"walk finished: {item.steps} steps, {offset + item.t:.3f} s simulated in "
                                        f"{wall:.3f} s wall time (real-time factor {(offset + item.t) / wall:.2f})")
+                self.diagnostics.publish()
             elif isinstance(item, CouldNotStart):
                 self._not_started(item.reason)
         return True
@@ -576,7 +588,7 @@ class SimulatorNode(Node):
         publishers = [self.sampled[topic] for topic in rows]
         payloads = [[row.tobytes() for row in encoded] for encoded in rows.values()]
         clock = [row.tobytes() for row in self.clock.encode(stamps_ns)]
-        controls, stop, live, paced = self.controls, self._stop, self.live, pacer.factor > 0
+        controls, stop, live, paced, sim_clock = self.controls, self._stop, self.live, pacer.factor > 0, self.clock
         if not self.context.ok():  # shut down under us: a stop (the stop flag says so at each sample)
             return False
         recorder, names, encoded = self.recorder, tuple(p.topic for p in publishers), tuple(rows.values())
@@ -599,8 +611,9 @@ class SimulatorNode(Node):
                     if controls.reset_requested() or stop.is_set() or paced and not pacer.wait(due, stop):
                         return False
                     publish_clock(clock[k])
+                    sim_clock.latest_ns = stamp
                     if k == 0:
-                        self.phases.sample(first.step, first.stance_side, first.t, base_ns)
+                        self.phases.sample(first.step, first.stance_side, first.phase, first.t, base_ns)
                     for send, data in outputs:
                         send(data[k], stamp)
                     if live is not None:

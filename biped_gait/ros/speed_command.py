@@ -34,7 +34,7 @@ from ..core.model.biped import BipedModel
 from ..core.walking.start_stop import why_not
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
-from ..core.walking.walk import Walker
+from ..core.walking.runner import Walker
 from ..recording import topics
 from .qos import LATCHED
 from .walk_messages import stamp_msg
@@ -61,16 +61,16 @@ class SpeedCommand:
         self._grid = DEFAULTS.walk_steps
         self.pub_envelope = publisher(VelocityEnvelope, topics.VELOCITY_ENVELOPE, LATCHED)
 
-    def start(self, walker: Walker, source: str | None) -> None:
+    def start(self, walker: Walker, source: str | None, stamp_ns: int) -> None:
         """Make the follower of ``walker``'s gait (``source``: its parameter set as given), and
-        publish its envelope."""
+        publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time)."""
         follower, note = follower_for(walker, DEFAULTS, self.rule, self.max_change, source, self.max_curvature,
                                       self.max_curvature_change)
         if note:
             self.node.get_logger().warn(f"speed command: {note}")
         self.node.get_logger().info(f"speed command: {follower.rule.describe()}; envelope {follower.envelope.describe()}")
-        self.pub_envelope.publish(envelope_msg(follower.envelope, follower.rule.describe(),
-                                               stamp_msg(self.node.get_clock().now().nanoseconds)))
+        self.pub_envelope.publish(envelope_msg(follower.envelope, follower.rule.describe(), stamp_msg(stamp_ns)),
+                                  stamp_ns)
         with self._lock:
             self.follower, pending = follower, self._pending
             self._grid = walker.grid

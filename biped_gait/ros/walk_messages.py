@@ -21,7 +21,7 @@ from tf2_msgs.msg import TFMessage
 
 from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
 
-from ..core.walking.walk import Touchdown
+from ..core.walking.events import Touchdown
 from ..core.walking.world import BASE_FRAME, ODOM_FRAME, WORLD_FRAME, Transform as WorldTransform, WorldPictures
 from ..recording import topics
 from .cdr_templates import CdrTemplate

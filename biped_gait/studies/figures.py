@@ -100,7 +100,7 @@ def effort_figure(results: Sequence[Gait], optima: Sequence[ArmOptimum] = (), ti
         face = colour if opt.interior else "none"
         what = "optimum" if opt.interior else f"least W ({opt.where})"
         marks += ax.plot(math.degrees(opt.alpha), opt.W, "o", markersize=7, color=colour, markerfacecolor=face,
-                         label=f"{what} {math.degrees(opt.alpha):.1f} deg, W = {opt.W:.2f}")
+                         label=f"{what} {math.degrees(opt.alpha):.1f} deg, W = {opt.W:.2f} N m s")
     ax.set_xlabel("arm amplitude alpha (deg)")
     ax.set_title(title or "Effort of the double support against the arm amplitude")
     _legend(ax, results, colours, label, marks)
@@ -205,14 +205,22 @@ def plan_figure(gait: Gait, model: BipedModel) -> Figure:
         angles.plot(t, np.degrees(column), label=name.replace("_", " "))
     angles.set_ylabel("joint angle (deg)")
     angles.legend(fontsize="xx-small", ncols=3, loc="upper center", bbox_to_anchor=(0.5, -0.16))
+    # Both axes from 0, the friction ratio's up to twice the larger of mu and itself: the ground's
+    # push (F_z > 0) and the friction used (ratio < mu) each read as a margin, the mu line apart
+    # from the curves, not as a bound they reach.
     reaction.plot(t, grf[:, 2], color="C0")
+    reaction.set_ylim(min(0.0, 1.1 * float(grf[:, 2].min())), 1.1 * max(float(grf[:, 2].max()), 0.0) or 1.0)
     reaction.set_ylabel("vertical ground reaction F_z (N)", color="C0")
     ratio = reaction.twinx()
-    ratio.plot(t, np.hypot(grf[:, 0], grf[:, 1]) / grf[:, 2], color="C3")
+    used = np.hypot(grf[:, 0], grf[:, 1]) / grf[:, 2]
+    ratio.plot(t, used, color="C3")
     mu = gait.problem.options.friction
     if math.isfinite(mu):
-        ratio.axhline(mu, color="C3", linestyle=":", linewidth=1.0, label=f"mu = {mu:g}")
-        ratio.legend(fontsize="small", loc="lower right")
+        ratio.axhline(mu, color="C3", linestyle=":", linewidth=1.0)
+        ratio.text(0.03, mu, f"mu = {mu:g}, the floor's friction", color="C3", fontsize="small", va="bottom",
+                   transform=ratio.get_yaxis_transform())
+    top = max(mu if math.isfinite(mu) else 0.0, float(np.nanmax(np.abs(used))) if np.isfinite(used).any() else 0.0)
+    ratio.set_ylim(0.0, 2.0 * top or 1.0)
     ratio.set_ylabel("friction ratio |F_xy| / F_z", color="C3")
     momentum.plot(t, gait.figures.h_vertical, color="C2")
     momentum.axhline(0.0, color="grey", linewidth=0.5)

@@ -17,6 +17,7 @@ L in m, T in s, alpha in rad (figures and text in degrees), W in N m s.
 from __future__ import annotations
 
 import math
+import re
 from collections import Counter
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
@@ -189,29 +190,54 @@ def region_figure(maps: WalkingMaps) -> Figure:
         handles.append(line)
     ax.set_xlabel("step length L (m)")
     ax.set_ylabel("period T (s)")
-    margins = f"; margins: {maps.margins}" if maps.margins else ""
-    ax.set_title(f"Where walking is possible, params {maps.params}\n({maps.mode} gait, some alpha in [0, 45] deg"
-                 f"{margins})", fontsize="medium")
+    margins = f"\nmargins: {maps.margins}" if maps.margins else ""
+    ax.set_title(f"Where walking is possible, params {maps.params}\n({maps.mode} gait, some alpha in [0, 45] deg)"
+                 f"{margins}", fontsize="medium")
     fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2)
     return fig
 
 
+def file_suffix(maps: WalkingMaps) -> str:
+    """What the maps' file names add for their margins ('' if none): '-swing-clearance-5-mm', ..."""
+    return "-" + re.sub(r"[^a-z0-9.]+", "-", maps.margins.lower()).strip("-") if maps.margins else ""
+
+
+def _no_gait(ax, maps: WalkingMaps) -> list[Patch]:
+    """The (L, T) cells without an admissible gait (the region map says why) shaded, the others
+    white; the legend's handles of both."""
+    none = np.pad(np.where(maps.region.T == 0, np.nan, 1.0), 1, mode="edge")  # a cell more around: the end tiles
+    lengths, periods = (np.concatenate([[v[0] - np.diff(v).mean()], v, [v[-1] + np.diff(v).mean()]])
+                        for v in (maps.step_lengths, maps.periods))
+    ax.pcolormesh(_edges(lengths), _edges(periods), none, cmap=ListedColormap([NO_GAIT_COLOUR]), vmin=0.0, vmax=1.0)
+    within = " within the margins" if maps.margins else ""
+    return [Patch(color=NO_GAIT_COLOUR, label=f"no admissible {maps.mode} gait{within} (the region map says why)"),
+            Patch(facecolor="white", edgecolor="#999999", label=f"admissible{within}; optima at every other atlas "
+                  "node only")]
+
+
 def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure, digits: int = 1,
-                 mark_ends: bool = False) -> list:
-    """Tiles of ``values`` at the optima's (L, T), each with its value in ``digits`` decimals
-    (as many as the colour bar's range needs to tell the tiles apart), dark text on light tiles;
-    ``mark_ends``: outline the tiles whose least W is at an end of the alpha range (no interior
-    minimum). Returns the legend handle of the outline (empty list if none)."""
+                 mark_ends: bool = False, missing: str = "") -> list:
+    """Tiles of ``values`` at the optima's (L, T) (every other atlas node), each with its value in
+    ``digits`` decimals (as many as the colour bar's range needs to tell the tiles apart), dark
+    text on light tiles, over the cells without an admissible gait shaded; a value that is not
+    finite is an empty tile marked '-', ``missing`` saying why; ``mark_ends``: outline the tiles
+    whose least W is at an end of the alpha range (no interior minimum). Returns the legend's
+    handles: the shading, the empty tile (if any), the outline (if any)."""
+    handles: list = _no_gait(ax, maps)
     lengths = [o.step_length for o in maps.optima]
     periods = [o.period for o in maps.optima]
     points = ax.scatter(lengths, periods, c=values, s=420, marker="s", cmap="viridis")
     for x, y, v in zip(lengths, periods, values):
-        red, green, blue, _ = points.cmap(points.norm(v)) if math.isfinite(v) else (0, 0, 0, 1)
+        red, green, blue, _ = points.cmap(points.norm(v)) if math.isfinite(v) else (1, 1, 1, 1)
         light = 0.299 * red + 0.587 * green + 0.114 * blue > 0.55
-        ax.annotate(f"{v:.{digits}f}" if math.isfinite(v) else "-", (x, y), ha="center", va="center", fontsize=7.5,
+        text = f"{v:.{digits}f}" if math.isfinite(v) else "-"
+        ax.annotate(text, (x, y), ha="center", va="center", fontsize=7.5 * min(1.0, 4.5 / len(text)),  # in the tile
                     color="black" if light else "white", fontweight="bold")
+    empty = [(x, y) for x, y, v in zip(lengths, periods, values) if not math.isfinite(v)]
+    if empty:
+        handles.append(ax.scatter(*zip(*empty), s=420, marker="s", facecolors="white", edgecolors="#999999",
+                                  linewidths=1.0, label=f"- {missing}"))
     ends = [(o.step_length, o.period) for o in maps.optima if not o.interior]
-    handles = []
     if mark_ends and ends:
         handles.append(ax.scatter(*zip(*ends), s=420, marker="s", facecolors="none", edgecolors="#e41a1c",
                                   linewidths=1.8, label="least W at an end of the alpha range (no interior minimum)"))
@@ -221,18 +247,24 @@ def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig
     return handles
 
 
+def _heading(maps: WalkingMaps) -> str:
+    """The maps' mode, parameter set and margins, for a title."""
+    return f"{maps.mode} gait, params {maps.params}" + (f", margins: {maps.margins}" if maps.margins else "")
+
+
 def optimum_figure(maps: WalkingMaps) -> Figure:
     """alpha*(L, T) (deg) and W*(L, T) (N m s) of the maps' mode over the admissible region, the
     tiles without an interior minimum (alpha* at an end of the range) outlined."""
     fig, (left, right) = _figure(2)
-    fig.set_size_inches(12.0, 5.2)
-    ends = _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima], "optimal arm amplitude alpha* (deg)",
-                        fig, mark_ends=True)
+    fig.set_size_inches(12.0, 5.6)
+    handles = _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima],
+                           "optimal arm amplitude alpha* (deg)", fig, mark_ends=True)
     _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True)
-    if ends:
-        fig.legend(handles=ends, fontsize="small", loc="outside lower center")
-    left.set_title(f"alpha*(L, T), {maps.mode} gait, params {maps.params}", fontsize="medium")
-    right.set_title(f"W*(L, T), {maps.mode} gait, params {maps.params}", fontsize="medium")
+    fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2, markerscale=0.5)
+    fig.suptitle(f"The optimal arm swing over the admissible region (every other atlas node), {_heading(maps)}",
+                 fontsize="medium")
+    left.set_title("alpha*(L, T)", fontsize="medium")
+    right.set_title("W*(L, T)", fontsize="medium")
     return fig
 
 
@@ -240,9 +272,16 @@ def ratio_figure(maps: WalkingMaps) -> Figure:
     """W of the other mode's gait over W of the maps' mode, both at the latter's alpha*."""
     other = GaitMode.ANTI_NORMAL if maps.mode is GaitMode.NORMAL else GaitMode.NORMAL
     fig, [ax] = _figure()
-    fig.set_size_inches(6.4, 5.2)
-    _scatter_map(ax, maps, [o.ratio for o in maps.optima], f"W {other} / W {maps.mode} at alpha*", fig, digits=2)
-    ax.set_title(f"Cost of the {other} arm swing, params {maps.params}", fontsize="medium")
+    fig.set_size_inches(6.4, 6.0)
+    ratios = [o.ratio for o in maps.optima]
+    finite = [r for r in ratios if math.isfinite(r)]
+    spread = max(finite) - min(finite) if len(finite) > 1 else 0.0
+    digits = max(2, math.ceil(-math.log10(spread)) + 1) if spread > 0 else 2  # enough to tell the tiles apart
+    handles = _scatter_map(ax, maps, ratios, f"W {other} / W {maps.mode} at alpha*", fig, digits=digits,
+                           missing=f"the {other} gait at alpha* is not admissible")
+    fig.legend(handles=handles, fontsize="small", loc="outside lower center", markerscale=0.5)
+    ax.set_title(f"Cost of the {other} arm swing at the {maps.mode} gait's alpha*\n{_heading(maps)}",
+                 fontsize="medium")
     return fig
 
 

@@ -1,10 +1,10 @@
 """The double support's duration d walked in MuJoCo (docs/results.md, "A double support that
-lasts"): for each d, a walk of a gait with ``engine="mujoco"`` (core/walking/mujoco_engine.py)
-and momentum steering, and what it takes:
+lasts"): for each d, a walk of a gait with ``engine="mujoco"`` (core/walking/engines/mujoco.py,
+phases/pulses.py) and momentum steering, and what it takes:
 
 - the effort E = (d / 2) sum |u| of the last double support (N m s) beside the impulses' W there;
 - the friction it needs: the largest |F_xy| / F_z of the planned pulses (the planner's model, at
-  the pulses' nodes) and of MuJoCo's stance-tip reaction over the last step's samples;
+  the pulses' nodes) and of MuJoCo's stance-tip reaction over the walk's samples;
 - the largest pulse torque (N m);
 - where the walk settles: the last step's duration (s), and its touchdown's distance from the
   plan's (max over q and qd of the predicted ballistic touchdown, rad, rad/s);
@@ -28,7 +28,10 @@ import numpy as np
 from ..core.gait.planner import GaitRequest
 from ..core.model.params import load_params
 from ..core.walking.steering import DEFAULT_RATE
-from ..core.walking.walk import Fell, Finished, PlannedOrbit, Walk, Walker
+from ..core.walking.events import Fell, Finished, StepSamples, Touchdown
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
+from ..core.walking.walk import Walk
 from .executors import planner_for
 
 STEPS = 20
@@ -67,36 +70,53 @@ HEADER = ("| d (ms) | steps walked | E (W) per step, N m s | friction planned | 
           "|---|---|---|---|---|---|---|---|---|")
 
 
-def _walk(orbit: PlannedOrbit, duration: float, shove: bool) -> tuple[Walk, object]:
+@dataclass(frozen=True)
+class _Walked:
+    """A walk's double supports (``PulsedTouchdown``), how it ended, and the largest |F_xy| / F_z of
+    MuJoCo's stance-tip reaction over its samples."""
+
+    records: list
+    end: object
+    friction_used: float
+
+
+def _walk(orbit: PlannedOrbit, duration: float, shove: bool) -> _Walked:
     def before(walker: Walker) -> None:
         if shove and walker.state.step == SHOVE_AT:
             walker.shove(np.full(len(walker.state.qd), SHOVE))
 
     walk = Walk(orbit, 100.0, STEPS, engine="mujoco", pulse_duration=duration, momentum_rate=DEFAULT_RATE,
                 before_step=before)
-    end = None
+    records, end, used = [], None, 0.0
     for item in walk.batches():
-        if isinstance(item, (Fell, Finished)):
+        if isinstance(item, StepSamples):
+            grf = np.array([sample.grf for sample in item.samples])
+            loaded = grf[:, 2] > 0
+            if loaded.any():
+                used = max(used, float(np.max(np.hypot(grf[loaded, 0], grf[loaded, 1]) / grf[loaded, 2])))
+        elif isinstance(item, Touchdown):
+            records.append(item.double_support)
+        elif isinstance(item, (Fell, Finished)):
             end = item
-    return walk, end
+    return _Walked(records, end, used)
 
 
 def pulse_row(orbit: PlannedOrbit, duration: float) -> PulseRow:
     """The walk of ``orbit`` with a double support of ``duration`` s, and its shoved twin."""
-    walk, end = _walk(orbit, duration, shove=False)
-    records = walk.walker.engine.touchdowns
+    walked = _walk(orbit, duration, shove=False)
+    records, end = walked.records, walked.end
     if isinstance(end, Fell) or not records:
         reason = end.reason if isinstance(end, Fell) else "no touchdown"
         return PulseRow(duration, len(records), reason, *([math.nan] * 8))
-    shoved, _ = _walk(orbit, duration, shove=True)
+    shoved = _walk(orbit, duration, shove=True)
     states = [np.concatenate([r.q_predicted, r.qd_predicted]) for r in records]
-    twins = [np.concatenate([r.q_predicted, r.qd_predicted]) for r in shoved.walker.engine.touchdowns]
+    twins = [np.concatenate([r.q_predicted, r.qd_predicted]) for r in shoved.records]
     gaps = [float(np.max(np.abs(a - b))) for a, b in zip(states[SHOVE_AT:], twins[SHOVE_AT:])]
     contraction = (gaps[-1] / gaps[0]) ** (1.0 / (len(gaps) - 1)) if len(gaps) > 1 and gaps[0] > 0 else math.nan
     last, q_t, qd_b = records[-1], orbit.q_t, orbit.qd_b
     error = max(float(np.max(np.abs(last.q_predicted - q_t))), float(np.max(np.abs(last.qd_predicted - qd_b))))
     return PulseRow(duration, len(records), "", last.effort, last.impulsive_effort,
-                    max(r.friction_planned for r in records), max(r.friction_used for r in records),
+                    max(r.friction_planned for r in records), walked.friction_used,
                     max(r.peak_torque for r in records), records[-1].t - records[-2].t if len(records) > 1 else last.t,
                     error, contraction)
 

@@ -35,7 +35,8 @@ from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from ..core.walking.push import DIRECTIONS, Push, horizontal_impulse
 from ..core.walking.steering import DEFAULT_RATE
-from ..core.walking.walk import PlannedOrbit, Walker
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
 from .executors import planner_for
 
 if TYPE_CHECKING:  # matplotlib and tqdm are imported where they are used: the CLI reads this module's defaults
@@ -213,8 +214,9 @@ def _figure(polar: bool = False) -> tuple[Figure, object]:
 
 
 def polar_figure(limits: Sequence[PushLimit], title: str) -> Figure:
-    """The largest push recovered (N s) against its direction, one closed curve per alpha (world
-    axes: forward up, left to the left, as seen from above)."""
+    """The largest push recovered (N s, the radius) against its direction, one closed curve per
+    alpha (world axes: forward up, left to the left, as seen from above), the pushed step's
+    stance foot (the right: the walk's first step) named at its side."""
     fig, ax = _figure(polar=True)
     ax.set_theta_zero_location("N")  # forward up; angles counter-clockwise: left to the left
     for i, alpha in enumerate(sorted({limit.alpha for limit in limits})):
@@ -224,9 +226,10 @@ def polar_figure(limits: Sequence[PushLimit], title: str) -> Figure:
         ax.plot(angles + angles[:1], values + values[:1], "o-", color=f"C{i}", markersize=4,
                 label=f"alpha = {math.degrees(alpha):.1f} deg")
     ax.set_xticks(np.radians([0, 45, 90, 135, 180, 225, 270, 315]),
-                  ["forward", "", "left", "", "backward", "", "right", ""])
+                  ["forward", "", "left", "", "backward", "", "right:\nstance\nfoot", ""])
     ax.set_rlabel_position(112.5)  # the push scale between the named directions
-    ax.set_title(title, fontsize="medium", pad=18)
+    ax.text(np.radians(112.5), ax.get_rmax() * 1.13, "N s", ha="center", va="center", fontsize="small")
+    ax.set_title(f"{title}\nright foot in stance; radius: the largest push recovered (N s)", fontsize="medium", pad=18)
     ax.legend(fontsize="small", loc="lower left", bbox_to_anchor=(-0.15, -0.12))
     return fig
 
@@ -241,10 +244,21 @@ def limit_vs_alpha_figure(limits: Sequence[PushLimit], title: str) -> Figure:
     ax.set_xlabel("arm amplitude alpha (deg)")
     ax.set_ylabel("largest push recovered (N s)")
     ax.set_yscale("log")
+    plain_log_axis(ax.yaxis)
     ax.set_title(title, fontsize="medium")
     ax.grid(True, alpha=0.3, which="both")
     ax.legend(fontsize="small")
     return fig
+
+
+def plain_log_axis(axis) -> None:
+    """A log axis labelled as numbers (0.5, 1, 2, 3), not powers of ten (4 x 10^-1): ticks at
+    1, 2, 3 and 5 of each decade."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 3.0, 5.0)))
+    axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def describe(limit: PushLimit) -> str:

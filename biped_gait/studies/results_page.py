@@ -25,7 +25,7 @@ from ..core.gait.planner import GaitPlanner, GaitRequest
 from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
 from .human_walking import human_comparison
-from .maps import WalkingMaps, compute_maps, optimum_figure, ratio_figure, reading, region_figure, stability_figure
+from .maps import WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
 from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
@@ -336,15 +336,16 @@ def differences(default: Study, table: Study, reference: Reference) -> list[str]
 
 
 def maps_figures(maps: WalkingMaps) -> dict[str, tuple]:
-    """Caption -> (figure, file name) of one parameter set's maps."""
-    name = maps.params
+    """Caption -> (figure, file name) of one parameter set's maps (their margins, if any, in both)."""
+    name, suffix = maps.params, file_suffix(maps)
+    margins = f", margins: {maps.margins}" if maps.margins else ""
     return {
-        f"Where walking is possible, parameter set {name}: the admissible region and its limits": (
-            region_figure(maps), f"map-region-{name}.png"),
-        f"Optimal arm amplitude and least effort over the admissible region, parameter set {name}": (
-            optimum_figure(maps), f"map-optimum-{name}.png"),
-        f"Anti-normal over normal effort at the optimal alpha, parameter set {name}": (
-            ratio_figure(maps), f"map-ratio-{name}.png"),
+        f"Where walking is possible, parameter set {name}{margins}: the admissible region and its limits": (
+            region_figure(maps), f"map-region-{name}{suffix}.png"),
+        f"Optimal arm amplitude and least effort over the admissible region, parameter set {name}{margins}": (
+            optimum_figure(maps), f"map-optimum-{name}{suffix}.png"),
+        f"Anti-normal over normal effort at the optimal alpha, parameter set {name}{margins}": (
+            ratio_figure(maps), f"map-ratio-{name}{suffix}.png"),
     }
 
 

@@ -17,7 +17,8 @@ from ..core.gait.gait import Gait
 from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from ..core.gait.stability import Multipliers, closed_loop
-from ..core.walking.walk import PlannedOrbit, Walker
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
 from .executors import planner_for
 
 

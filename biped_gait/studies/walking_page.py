@@ -28,7 +28,8 @@ from ..core.dynamics.settings import DEFAULTS
 from ..core.gait.stability import closed_loop
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.walking.transitions import follower_for
-from ..core.walking.walk import PlannedOrbit, Walker
+from ..core.walking.orbit import PlannedOrbit
+from ..core.walking.runner import Walker
 from .executors import planner_for
 from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushLimit, limit_vs_alpha_figure, polar_figure,
                          run_push_study)
@@ -111,7 +112,8 @@ def speed_ramp(params: BipedParams, alpha: float, speeds: tuple[float, float] = 
     gait = planner.plan(GaitRequest(0.45, 0.45, alpha, GaitMode.NORMAL))
     walker = Walker(planner.hybrid, PlannedOrbit.of(gait), rate=50.0, momentum_rate=DEFAULT_RATE)
     follower, note = follower_for(walker, DEFAULTS)
-    settle = math.ceil(abs(follower.speed - speeds[0]) / follower.max_change)
+    settle = max(math.ceil(abs(follower.speed - speeds[0]) / follower.max_change),  # speed and period there
+                 math.ceil(abs(follower.orbit.period - follower.rule.gait(speeds[0]).period) / follower.max_period_change))
     ramp = list(np.linspace(*speeds, math.ceil(abs(speeds[1] - speeds[0]) / RAMP_RATE) + 1))
     schedule = [speeds[0]] * (settle + hold) + ramp + [speeds[1]] * hold + ramp[::-1] + [speeds[0]] * hold
     steps = []

@@ -32,7 +32,7 @@ from .gait import DoubleSupport, Gait, GaitProblem, Stride
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, friction_ratios, solve_impulses
 from ..model.biped import BipedModel
-from ..model.params import BipedParams, load_params
+from ..model.params import BipedParams, load_params, names_set
 from .figures import StepFigures, energy_drift, step_figures
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
@@ -229,6 +229,15 @@ class GaitPlanner:
             self._note(f"{self.atlas_notes[mode]}; planning without it ({mode.value} gaits)")
         return self._atlases[mode]
 
+    def _validate(self, request: GaitRequest) -> GaitProblem:
+        """The problem of ``request``; ``ValueError`` if it is bad or names another parameter set
+        (its ``params`` may name this one by its name, by its file's path, or not at all)."""
+        if not names_set(request.params, self.params, self.source):
+            raise ValueError(f"this planner holds parameter set {self.params.name!r}"
+                             f"{f' ({self.source})' if self.source and self.source != self.params.name else ''}, "
+                             f"not {request.params!r}")
+        return validate_request(request, self.params)
+
     def plan(self, request: GaitRequest, guess: tuple[np.ndarray, float] | None = None, cold: bool = False) -> Gait:
         """Solve one gait. ``guess`` = (qd(0), theta) of a nearby gait warm-starts the BVP (a
         continuation chain's own step); ``cold``: only the straight-line start; without either
@@ -238,9 +247,7 @@ class GaitPlanner:
         ``converged`` or ``admissible`` False and the reasons in ``verdict`` (and a ``hint`` of
         where admissible gaits are, when the atlas knows).
         """
-        if request.params and request.params != self.params.name:
-            raise ValueError(f"this planner holds parameter set {self.params.name!r}, not {request.params!r}")
-        problem = validate_request(request, self.params)
+        problem = self._validate(request)
         if math.isfinite(problem.turn_radius):
             raise ValueError("a gait on a circle is a stride of two steps: plan it with plan_stride")
         start = time.perf_counter()
@@ -263,7 +270,7 @@ class GaitPlanner:
         reached) is returned so, with the smallest radius of an admissible stride at that
         (L, T, alpha) in its ``hint``; ``stability``: with the stride's open-loop multipliers (they
         cost about what the solve does)."""
-        problem = validate_request(request, self.params)
+        problem = self._validate(request)
         if not math.isfinite(problem.turn_radius):
             raise ValueError("a straight gait is one step: plan it with plan")
         start = time.perf_counter()
@@ -277,7 +284,8 @@ class GaitPlanner:
         path: list[tuple[float, StrideGuess]] = []
         if stride is None and guess is not None:
             stride = self._stride(problem, guess, "guess", stability)
-            if guess_curvature is not None and not (stride.converged and _stride_near(stride, guess)):
+            resumable = guess_curvature is not None and guess_curvature != point[3]  # a continuation has a span
+            if resumable and not (stride.converged and _stride_near(stride, guess)):
                 resumed = self._curvature_path(problem, start=(guess_curvature, guess))[-1][1]
                 stride = self._stride(problem, resumed, "continuation", stability)
         elif stride is None or not stride.admissible:

@@ -12,6 +12,7 @@ m/s^2, rad.
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -95,6 +96,29 @@ def load_params(name_or_path: str | Path | None = None) -> BipedParams:
     raise ValueError(
         f"unknown parameter set {clip(repr(key))}: give one of {', '.join(shipped_param_names())} or a YAML file path"
     )
+
+
+def names_set(given: str, params: BipedParams, source: str | None = None) -> bool:
+    """True if ``given`` (the ``params`` of a request or a plan) names the parameter set
+    ``params``, read from ``source`` (a shipped name or a file's path; None: given as values):
+    empty (the holder's own set), ``source`` itself or the same file by another path, the set's
+    name, or a shipped name whose values these are (a shipped name names the shipped set, even
+    where a file took that name). A set given as a file is thus the same set whether named by its
+    path or by its name. A path is compared with ``source``, never read: a holder of one set does
+    not load a file it is sent."""
+    if given in ("", source):
+        return True
+    if given in shipped_param_names():
+        return _shipped_params(given) == params
+    return given == params.name or source is not None and _same_file(given, source)
+
+
+def _same_file(a: str, b: str) -> bool:
+    """True if the paths ``a`` and ``b`` are the same existing file."""
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        return False
 
 
 @lru_cache(maxsize=None)

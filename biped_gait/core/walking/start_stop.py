@@ -55,7 +55,7 @@ from ..gait.admissibility import describe, figure_limits
 from ..gait.configurations import boundary_configurations
 from ..gait.figures import StepFigures, energy_drift, step_figures
 from .steering import momentum_row, pelvis_pitch
-from .walk import PlannedOrbit
+from .orbit import PlannedOrbit
 
 TOLERANCE = 1e-12  # rad, kg m^2/s: the walker's re-aim's
 NEWTON_ITERATIONS = 30

@@ -65,6 +65,9 @@ COARSE_TOLERANCE = 1e-9  # where Newton on the coarse grid hands over to the wal
 CHORD_STEPS = 7
 HOMOTOPY_STAGES = 8  # stages of the fallbacks' continuations
 NEWTON_ITERATIONS = 30
+DIRECT_ITERATIONS = 10  # the direct Newton's of a transition's first step and of a closure round: from
+# their warm starts it converges in 1 to 8; far from the new orbit it wanders instead (the 13-DOF set's
+# transitions in T: 30 iterations, half a second), and the continuation from the plain re-aim is cheaper
 FD_STEP = 1e-6  # rad: central differences of the impact map's configuration dependence
 
 
@@ -186,35 +189,49 @@ class MomentumSteering:
         self.coarse = coarse or flow
         self.transition = transition
         self.offset = np.zeros(hybrid.bm.nq + 2)
+        self._last: tuple[np.ndarray, float] | None = None  # the last solution (v, tau, theta') and its law's value
 
     def solve(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, duration: float,
-              foot_line_moment: float = 0.0) -> tuple[np.ndarray, float, float]:
+              foot_line_moment: float = 0.0, again: bool = False) -> tuple[np.ndarray, float, float]:
         """The next step's initial velocity v (its own coordinates, rad/s), duration tau (s) and
         touchdown pitch theta' (rad), from the touchdown at ``q_pre`` (rad) whose impact map is
         ``impact`` and pre-impact velocity ``xd_b`` (extended, rad/s); ``duration``: the warm
         start of tau; ``foot_line_moment``: what the ground's spin moments change of the momentum
-        about the feet line (kg m^2/s, ``PlannedOrbit``). ``SteeringFailed`` if no stage finds a step.
+        about the feet line (kg m^2/s, ``PlannedOrbit``); ``again``: the same touchdown as the
+        last solve, with another ``foot_line_moment`` (the walker's closure rounds).
+        ``SteeringFailed`` if no stage finds a step.
 
-        Stages, each tried when the ones before fail: chord steps on the walker's grid with the
-        orbit's Jacobian (not for a transition's first step); Newton with the law from the orbit's
-        values (moved by the last gait's offset, for a transition's first step); the plain re-aim
-        (theta' = theta_p) by Newton, then the law reached from it in ``HOMOTOPY_STAGES`` stages of
-        its right-hand side, as far as it goes (a step that steers less this time, rather than
-        none); last, the law along ``HOMOTOPY_STAGES`` touchdowns between the orbit's and this one.
-        Newton runs on the coarse grid, finished by chord steps (else Newton) on the walker's."""
+        Stages, each tried when the ones before fail: ``again``, Newton from the last solution
+        with the law as far as it was met there (the solution moves by what the spin moments
+        changed: one or two iterations); chord steps on the
+        walker's grid with the orbit's Jacobian (not for a transition's first step); Newton with
+        the law from the orbit's values (moved by the last gait's offset, for a transition's first
+        step); the plain re-aim (theta' = theta_p) by Newton, then the law reached from it in
+        ``HOMOTOPY_STAGES`` stages of its right-hand side, as far as it goes (a step that steers
+        less this time, rather than none); last, the law along ``HOMOTOPY_STAGES`` touchdowns
+        between the orbit's and this one. Newton runs on the coarse grid, finished by chord steps
+        (else Newton) on the walker's."""
         equations = _Equations(self, q_pre, impact, xd_b, foot_line_moment)
         x0 = np.concatenate([self.ref.qd_a, [duration, self.ref.theta]])
         x = None
-        if self.transition is None:  # the chord steps reach only a state near the orbit
+        if again and self._last is not None:
+            last, law = self._last
+            equations.law, full = law, equations.law
+            result = equations.solve(last, free_pitch=True, iterations=DIRECT_ITERATIONS)
+            x = result.x if result.converged else None
+            equations.law = equations.law if x is not None else full
+        if x is None and self.transition is None:  # the chord steps reach only a state near the orbit
             result = newton.chord(lambda x: equations(x, False)[::2], x0, self.ref.jacobian, TOLERANCE, CHORD_STEPS,
                                   contraction=0.1)
             x = result.x if result.converged else None
+        iterations = NEWTON_ITERATIONS if self.transition is None else DIRECT_ITERATIONS
         if x is None:
-            result = equations.solve(x0 if self.transition is None else x0 + self.transition, free_pitch=True)
+            result = equations.solve(x0 if self.transition is None else x0 + self.transition, free_pitch=True,
+                                     iterations=iterations)
             x = result.x if result.converged else None
         self.transition = None
         if x is None:
-            x = self._from_plain(equations, x0)
+            x = self._from_plain(equations, x0, iterations)
         if x is None:
             x = self._from_orbit(q_pre, impact, xd_b, x0, foot_line_moment)
         if x is None:
@@ -223,22 +240,26 @@ class MomentumSteering:
         if not x[n] > 0:
             raise SteeringFailed("re-aiming the next step gave a duration <= 0: the state is too far from the plan")
         self.offset = x - np.concatenate([self.ref.qd_a, [self.ref.period, self.ref.theta]])
+        self._last = (x, equations.law)
         return x[:n], float(x[n]), float(x[n + 1])
 
-    def _from_plain(self, equations: "_Equations", x0: np.ndarray) -> np.ndarray | None:
+    def _from_plain(self, equations: "_Equations", x0: np.ndarray, iterations: int = NEWTON_ITERATIONS
+                    ) -> np.ndarray | None:
         """The plain re-aim, then the law's right-hand side moved from the plain solution's value
-        to the law's in stages; the last stage solved (None if the plain re-aim fails)."""
+        to the law's in stages (Newton's ``iterations`` each); the last stage solved (None if the
+        plain re-aim fails), with ``equations.law`` the right-hand side it meets."""
         plain = equations.solve(x0, free_pitch=False)
         if not plain.converged:
             return None
         law, x = equations.law, plain.x
-        start = float(equations(x, False)[0][-1]) + law  # the law's left-hand side at the plain solution
+        start = reached = float(equations(x, False)[0][-1]) + law  # the law's left-hand side at the plain solution
         for fraction in np.linspace(0.0, 1.0, HOMOTOPY_STAGES + 1)[1:]:
             equations.law = start + fraction * (law - start)
-            stage = equations.solve(x, free_pitch=True)
+            stage = equations.solve(x, free_pitch=True, iterations=iterations)
             if not stage.converged:
                 break
-            x = stage.x
+            x, reached = stage.x, equations.law
+        equations.law = reached
         return x
 
     def _from_orbit(self, q_pre: np.ndarray, impact: ImpactMap, xd_b: np.ndarray, x0: np.ndarray,
@@ -303,9 +324,10 @@ class _Equations:
                                                                        ref.direction) @ run.qd
         return f, jac, None
 
-    def solve(self, x0: np.ndarray, free_pitch: bool) -> newton.SolveResult:
-        """Newton from ``x0`` on the coarse grid, finished by chord steps on the walker's grid
-        with the last coarse Jacobian, else by Newton there. The result's x always has theta'."""
+    def solve(self, x0: np.ndarray, free_pitch: bool, iterations: int = NEWTON_ITERATIONS) -> newton.SolveResult:
+        """Newton from ``x0`` on the coarse grid (at most ``iterations``), finished by chord steps
+        on the walker's grid with the last coarse Jacobian, else by Newton there. The result's x
+        always has theta'."""
         q_n = self.steering.hybrid.bm.nq
         n = q_n + 2 if free_pitch else q_n + 1
         coarse, fine = self.steering.coarse, self.steering.flow
@@ -314,7 +336,7 @@ class _Equations:
             return lambda x, jacobian: self(x, jacobian, free_pitch, flow)
 
         tol = TOLERANCE if coarse is fine else COARSE_TOLERANCE
-        result = newton.newton(on(coarse), x0[:n], tol, NEWTON_ITERATIONS)
+        result = newton.newton(on(coarse), x0[:n], tol, iterations)
         if result.converged and coarse is not fine:
             finish = newton.chord(lambda x: on(fine)(x, False)[::2], result.x, result.jacobian, TOLERANCE,
                                   CHORD_STEPS, contraction=0.1)

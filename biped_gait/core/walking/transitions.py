@@ -3,16 +3,24 @@
 ``SpeedFollower`` holds the commanded speed v (m/s; clamped to the speed rule's admissible
 range) and yaw rate omega (rad/s; as the curvature omega / v, clamped to ``max_curvature``,
 turning models only) and, before each step of the walker, moves the gait the walker aims at one
-transition towards the gait of that command: the speed of the aimed gait changes by at most
-``max_change`` (m/s) per step (an acceleration bound) and its curvature 1 / R by at most
-``max_curvature_change`` (1/m), the rule (``speed``) gives the next gait's (L, T) at the walk's
-arm amplitude and mode. A straight gait's periodic orbit is solved by the shooting BVP
-(``bvp``, coarse Newton finished on the walker's grid) warm-started from the gait atlas's
-interpolation (``Atlas.guess``), else from the secant through the last two gaits solved (the
-gait aimed at so far, when there is one); a gait on a circle is a stride of two steps
-(``GaitPlanner.plan_stride``) warm-started from the last stride (or the straight gait). A gait
+transition towards the gait of that command, the rule's (``speed``) gait of speed v at the
+walk's arm amplitude and mode on the circle of curvature omega / v: the speed of the aimed gait
+changes by at most ``max_change`` (m/s) per step (an acceleration bound), its period by at most
+``speed.MAX_SLOPE`` times that (s: as fast as the rule's own period changes with the speed, so
+that a walk that starts off the rule's gaits, the plan's, joins them gradually), and its
+curvature 1 / R by at most ``max_curvature_change`` (1/m); L = v T. A straight gait's periodic
+orbit is solved by the shooting BVP (``bvp``, coarse Newton finished on the walker's grid)
+warm-started from the gait atlas's interpolation (``Atlas.guess``), else from the secant through
+the last two gaits solved (the gait aimed at so far, when there is one); a gait on a circle is a
+stride of two steps (``GaitPlanner.plan_stride``) warm-started from the last stride (or the
+straight gait), continued in the curvature from it when the solve leaves its branch. A gait
 whose swing foot would come up to the touchdown from under the ground (``speed.walkable_nodes``)
 is refused.
+
+A transition that cannot be reached (not solved, or not admissible) is replaced by the nearest
+one that can: the gaits a half and a quarter of the way to it. If none can, the follower holds
+the gait it walks and says so once, and tries again only when the command changes: a gait is
+never retried step after step.
 
 The walker (``Walker.retarget``) then makes the step a transition step: at its touchdown the
 impulses are re-solved from the actual pre-impact state towards the new gait, and the next step
@@ -34,9 +42,10 @@ from ..gait.atlas import Atlas, AtlasError, atlas_path
 from ..gait.bvp import solve_bvp
 from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
-from .speed import FixedCadence, LeastEffort, SpeedRule, walkable_nodes
+from .speed import MAX_SLOPE, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
 from .steering import pelvis_pitch
-from .walk import Cycle, PlannedOrbit, Walker, as_cycle
+from .orbit import Cycle, PlannedOrbit, as_cycle
+from .runner import Walker
 from ..model.biped import BipedModel
 
 MAX_CHANGE = 0.05  # m/s per step: the default bound on the aimed gait's change of speed
@@ -44,6 +53,7 @@ MAX_CURVATURE_CHANGE = 0.1  # 1/m per step: the default bound on the aimed gait'
 MAX_CURVATURE = 0.5  # 1/m: the default bound on the curvature (R >= 2 m; admissible strides at the
 # default gait reach about 1 / 1.1 m, docs/results.md)
 SPEED_RULES = ("least_effort", "cadence")
+NEARER = (0.5, 0.25)  # the fractions of a transition tried when it cannot be reached
 
 
 @dataclass(frozen=True)
@@ -106,7 +116,8 @@ class SpeedFollower:
         self._solved = [((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(bm, self.orbit.q_t)))]
         self._stride: StrideGuess | None = (
             (cycle[0].qd_a, cycle[0].theta, cycle[1].qd_a, cycle[1].theta) if len(cycle) == 2 else None)
-        self._commanded = (self.speed, self.curvature)
+        self._commanded: tuple[float, float] | None = None  # (speed m/s, curvature 1/m); None: walk the plan
+        self._held: tuple[float, float] | None = None  # a command none of whose transitions could be reached
         self._lock = threading.Lock()
         self.transitions: list[Transition] = []
 
@@ -117,9 +128,14 @@ class SpeedFollower:
 
     @property
     def commanded(self) -> float:
-        """The commanded speed (m/s), clamped."""
+        """The commanded speed (m/s), clamped (the aimed gait's before any command)."""
         with self._lock:
-            return self._commanded[0]
+            return self.speed if self._commanded is None else self._commanded[0]
+
+    @property
+    def max_period_change(self) -> float:
+        """The largest change of the aimed gait's period per step (s)."""
+        return MAX_SLOPE * self.max_change
 
     def command(self, speed: float, yaw_rate: float = 0.0) -> tuple[float, float, bool]:
         """Command ``speed`` (m/s) and ``yaw_rate`` (rad/s, positive turns left); returns the speed
@@ -137,45 +153,75 @@ class SpeedFollower:
 
     def before_step(self, walker: Walker) -> Transition | None:
         """Aim ``walker``'s next step one transition closer to the commanded speed and turn (None
-        if it is at them already). A gait whose orbit cannot be solved is not aimed at: the
-        transition is returned with its ``failure``, and the next step tries again."""
+        if it is at them already, no command came, or the command is held). A transition that
+        cannot be reached is replaced by the nearest one that can (``NEARER``); if none can, the
+        follower holds its gait until the command changes: the transition is returned with its
+        ``failure``, which says so."""
         with self._lock:
-            commanded, aimed = self._commanded
-        if abs(commanded - self.speed) < 1e-9 and abs(aimed - self.curvature) < 1e-12:
+            command = self._commanded
+        if command is None or command == self._held:
             return None
-        speed = self.speed + float(np.clip(commanded - self.speed, -self.max_change, self.max_change))
-        curvature = self.curvature + float(np.clip(aimed - self.curvature, -self.max_curvature_change,
-                                                   self.max_curvature_change))
-        gait = self.rule.gait(speed)
+        commanded, aimed = command
+        current = np.array([self.speed, self.orbit.period, self.curvature])
+        turning = aimed != 0.0 or self.curvature != 0.0  # the period is held on a turn: its strides at one period
+        goal = np.array([commanded, self.orbit.period if turning else self.rule.gait(commanded).period, aimed])
+        if np.all(np.abs(goal - current) < (1e-9, 1e-9, 1e-12)):
+            return None
+        bounds = np.array([self.max_change, self.max_period_change, self.max_curvature_change])
+        full = current + np.clip(goal - current, -bounds, bounds)
         start = time.perf_counter()
-        if abs(curvature) < 1e-12:
-            curvature = 0.0
-            orbit, failure = self._orbit(walker, gait.step_length, gait.period)
-        else:
-            orbit, failure = self._stride_cycle(gait.step_length, gait.period, curvature)
-        transition = Transition(walker.state.step, commanded, speed, gait.step_length, gait.period,
-                                time.perf_counter() - start, failure, curvature)
+        failures = []
+        for fraction in (1.0, *NEARER):
+            speed, period, curvature = current + fraction * (full - current)
+            curvature = 0.0 if abs(curvature) < 1e-12 else float(curvature)
+            step_length = float(speed * period)
+            if curvature == 0.0:
+                orbit, failure = self._orbit(walker, step_length, float(period))
+            else:
+                orbit, failure = self._stride_cycle(walker, step_length, float(period), curvature)
+            if orbit is not None:
+                break
+            failures.append(failure)
+        if orbit is None:
+            self._held = command
+            speed, period, curvature = current
+            step_length = float(speed * period)
+            failures.append(f"holding the gait L = {self.orbit.step_length:.3f} m, T = {self.orbit.period:.3f} s"
+                            f"{f', R = {1.0 / curvature:.3g} m' if curvature else ''} until the command changes")
+        transition = Transition(walker.state.step, commanded, float(speed), step_length, float(period),
+                                time.perf_counter() - start, "; ".join(failures) if orbit is None else "",
+                                curvature)
         self.transitions.append(transition)
         if orbit is not None:
             walker.retarget(orbit)
-            self.orbit, self.speed, self.curvature = as_cycle(orbit)[0], speed, curvature
-            if curvature == 0.0:
+            self.orbit, self.speed, self.curvature = as_cycle(orbit)[0], float(speed), curvature
+            if curvature == 0.0:  # straight again: the next turn starts from a straight gait
+                self._stride = None
                 self._solved = [*self._solved[-1:],
                                 ((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(self.bm, self.orbit.q_t)))]
         return transition
 
-    def _stride_cycle(self, step_length: float, period: float, curvature: float) -> tuple[Cycle | None, str]:
+    def _stride_cycle(self, walker: Walker, step_length: float, period: float,
+                      curvature: float) -> tuple[Cycle | None, str]:
         """The stride (L m, T s) on the circle of curvature ``curvature`` (1/m) at the walk's alpha
-        and mode, warm-started from the last stride (or the last straight gait); (None, why) if
-        it is not reached or not admissible."""
+        and mode, warm-started from the last stride, moved by as much as the straight gait moves
+        from its (L, T) to these (a stride's velocities change with (L, T) about as the straight
+        gait's do: the last stride alone, 0.0125 s away, leaves the branch), or from the straight
+        gait for the first; continued in the curvature from the warm start's when the solve
+        leaves its branch. (None, why) if it is not reached or not admissible."""
         current = self.orbit
         if self._stride is not None:
-            guess = self._stride
+            guess, solved_at = self._stride, self.curvature
+            if (step_length, period) != (current.step_length, current.period):
+                qd, theta = self._straight(walker, step_length, period)
+                qd_0, theta_0 = self._straight(walker, current.step_length, current.period)
+                guess = (guess[0] + qd - qd_0, guess[1] + theta - theta_0, guess[2] + qd - qd_0,
+                         guess[3] + theta - theta_0)
         else:
-            qd, theta = self._secant((step_length, period))
-            guess = (qd, theta, qd, theta)
+            qd, theta = self._straight(walker, step_length, period)
+            guess, solved_at = (qd, theta, qd, theta), 0.0
         request = GaitRequest(step_length, period, current.arm_amplitude, current.mode, turn_radius=1.0 / curvature)
-        stride = self.turning.plan_stride(request, guess, stability=False)
+        stride = self.turning.plan_stride(request, guess, stability=False, guess_curvature=solved_at)
         where = f"the stride L = {step_length:.3f} m, T = {period:.3f} s, R = {1.0 / curvature:.3g} m"
         if not stride.converged:
             return None, f"{where}: not reached from the last gait"
@@ -185,6 +231,15 @@ class SpeedFollower:
         self._stride = (a.qd_a, a.theta, b.qd_a, b.theta)
         return tuple(replace(PlannedOrbit.of(step), params=current.params, effort=current.effort,
                              options=current.options) for step in stride.steps), ""
+
+    def _straight(self, walker: Walker, step_length: float, period: float) -> tuple[np.ndarray, float]:
+        """qd(0) and theta of the straight gait (L m, T s): the last one solved, else its orbit
+        solved now, else the secant's warm start."""
+        (point, solved) = self._solved[-1]
+        if point == (step_length, period):
+            return solved
+        orbit, _ = self._orbit(walker, step_length, period)
+        return (orbit.qd_a, pelvis_pitch(self.bm, orbit.q_t)) if orbit is not None else self._secant((step_length, period))
 
     def _secant(self, point: tuple[float, float]) -> tuple[np.ndarray, float]:
         """The warm start at (L m, T s): the last gait's, moved along the secant through the last
