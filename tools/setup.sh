@@ -3,10 +3,11 @@
 # biped_gait package installed in editable mode, and builds the ROS 2 interfaces of msg_defs/
 # into it (the venv is the ROS prefix). Idempotent: a second run only checks.
 #
-# The steps overlap on two cores: the native modules (tools/build_native.sh) compile as soon as
-# the four wheels they compile against are installed, while pip installs the rest; the ROS
-# interfaces (tools/build_interfaces.sh) build while the package's bytecode is compiled. Each
-# background step logs to build/<step>.log, shown if it fails. Figures: docs/development.md.
+# The steps overlap on two cores: pip installs first the four wheels the native modules compile
+# against, then the ROS 2 wheels (with what they require, at the pinned versions), then the rest;
+# the native modules (tools/build_native.sh) compile from the first point on, the ROS interfaces
+# (tools/build_interfaces.sh) from the second. Each background step logs to build/<step>.log,
+# shown if it fails. Figures: docs/development.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
@@ -67,16 +68,20 @@ if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/dynami
   fi
   start native "$nstamp" "$nwant" bash tools/build_native.sh
 fi
-if [ "$requirements_current" = no ]; then
-  pip_install -r requirements.txt
-  pip_install --no-deps --no-build-isolation -e .
-  echo "$want" > "$stamp"
-fi
 # The ROS interfaces, rebuilt when their definitions change.
 istamp=.venv/.interfaces.sha
 iwant=$(find msg_defs tools/build_interfaces.sh -type f -print0 | sort -z | xargs -0 cat | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$istamp" 2>/dev/null)" != "$iwant" ]; then
+  if [ "$requirements_current" = no ]; then
+    # shellcheck disable=SC2046  # one argument per ROS 2 wheel
+    pip_install -c requirements.txt $(grep -oE '^ros-[A-Za-z0-9-]+' requirements.txt)
+  fi
   start interfaces "$istamp" "$iwant" bash tools/build_interfaces.sh
+fi
+if [ "$requirements_current" = no ]; then
+  pip_install -r requirements.txt
+  pip_install --no-deps --no-build-isolation -e .
+  echo "$want" > "$stamp"
 fi
 # The package's bytecode: where PYTHONDONTWRITEBYTECODE=1 no .pyc is written at import, and
 # every process a test or a launch starts would compile the package again (pip and the
