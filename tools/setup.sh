@@ -73,8 +73,9 @@ istamp=.venv/.interfaces.sha
 iwant=$(find msg_defs tools/build_interfaces.sh -type f -print0 | sort -z | xargs -0 cat | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$istamp" 2>/dev/null)" != "$iwant" ]; then
   if [ "$requirements_current" = no ]; then
-    # shellcheck disable=SC2046  # one argument per ROS 2 wheel
-    pip_install -c requirements.txt $(grep -oE '^ros-[A-Za-z0-9-]+' requirements.txt)
+    # shellcheck disable=SC2046  # one argument per ROS 2 wheel (and catkin_pkg, which ament_cmake
+    # imports without requiring it)
+    pip_install -c requirements.txt $(grep -oE '^(ros-[A-Za-z0-9-]+|catkin-pkg)' requirements.txt)
   fi
   start interfaces "$istamp" "$iwant" bash tools/build_interfaces.sh
 fi
