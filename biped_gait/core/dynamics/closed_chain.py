@@ -128,6 +128,24 @@ class ClosedChain:
         tau = pin.rnea(self.ds, self.ds_data, x, xd, xdd)
         return (tau - self.new_tip(q).T @ new)[self.roots]
 
+    def wrenches(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, new: np.ndarray) -> np.ndarray:
+        """[Fx, Fy, Fz, Mz] at the old and at the new tip (2 x 4: N; N m about the vertical through
+        the tip) for the motion (q, qd, qdd) and the new tip's reaction ``new`` (all its components):
+        the extended model's inverse dynamics gives the whole ground wrench at the old tip, the root
+        (``samples.ground_reaction_inverse_dynamics``); the new tip's force and spin moment, moved
+        there, are taken from it."""
+        bm = self.bm
+        x, xd, xdd = bm.extended_state(q), np.concatenate([np.zeros(3), qd]), np.concatenate([np.zeros(3), qdd])
+        total = pin.rnea(bm.extended, bm.extended_data, x, xd, xdd)[:3]
+        moment = bm.extended_data.f[1].angular[2]
+        force, tip = new[:3], bm.swing_tip(q)
+        spin = 0.0
+        if not self.lateral_free:  # the spin moment about the new tip's shin, its vertical part
+            pin.framesForwardKinematics(bm.single, bm.single_data, q)
+            spin = float(new[3] * bm.single_data.oMf[bm.single.getFrameId(SWING_TIP)].rotation[2, 2])
+        old_moment = moment - (tip[0] * force[1] - tip[1] * force[0]) - spin
+        return np.array([[*(total - force), old_moment], [*force, spin]])
+
     def full_force(self, held: np.ndarray, lateral: float = 0.0) -> np.ndarray:
         """The new tip's reaction with all its components from its held rows (``lateral``: the free
         lateral force, N, with legs of pitch joints only)."""

@@ -328,7 +328,7 @@ def plan_finite_support(hybrid: HybridStep, gait: Gait, duration: float,
     if not duration > 0 or not duration < gait.period:
         raise ValueError(f"the double support's duration must be in (0, T = {gait.period:g}) s, got {duration:g} s")
     bm = hybrid.bm
-    n, na = bm.nq, len(bm.actuated)
+    n = bm.nq
     first = min(duration, FIRST_DURATION)
     impulses = gait.double_support.impulses
     v0 = hybrid.exchange.velocity(gait.step.q_target, impulses.xd_plus)

@@ -86,8 +86,8 @@ class Walker:
         self.context = WalkContext(hybrid, feedback, self.engine, TrunkPush(hybrid.bm))
         self.phase = phase if phase is not None else SingleSupport()
         aim = feedback.aim(as_cycle(orbit))
-        first = aim.orbit
-        self.state = WalkState(np.array(first.q0), np.array(first.qd_a), aim,
+        q, qd = self.phase.first_state(aim)
+        self.state = WalkState(np.array(q), np.array(qd), aim,
                                stance_foot=np.array([0.0, -hybrid.bm.params.hip_half_width, 0.0]))
         self.sample_index = 0  # the next sample is at sample_index / rate in the walk (s)
         self._workspace = self.engine.workspace()
@@ -244,18 +244,21 @@ class Walker:
         if measured is not None:
             forces = measured
         feet = phase.feet(s)
+        friction = min(self.engine.contact_friction, phase.friction)
         checked_after = LINKS_CHECKED_AFTER * s.aim.period
         for k, tau in enumerate(taus):
             samples.append(Sample(s.t + tau, tau, q[k], qd[k], forces[k], feet, s.step, phase.kind))
             self.sample_index += 1
-            fall = self._fall(samples[-1], float(lowest[k]), checked_after)
+            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction)
             if fall:
                 return samples, fall
         return samples, ""
 
-    def _fall(self, sample: Sample, lowest_link: float, checked_after: float) -> str:
+    @staticmethod
+    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float) -> str:
         """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
-        lowest knee, hip, shoulder or hand, checked after ``checked_after`` s in the step."""
+        lowest knee, hip, shoulder or hand, checked after ``checked_after`` s in the step; ``mu``:
+        the friction coefficient its contact forces must keep within (inf: none checked)."""
         several = len(sample.feet) > 1
         for foot, force in zip(sample.feet, sample.forces):
             if not force[2] > 0.0:
@@ -263,7 +266,6 @@ class Walker:
                 return f"vertical ground reaction{at} not positive ({force[2]:.3g} N) at t = {sample.t:.4f} s"
         if sample.t_step > checked_after and lowest_link < 0.0:
             return f"a link went below the ground at t = {sample.t:.4f} s"
-        mu = self.engine.contact_friction
         if math.isfinite(mu):
             for foot, (fx, fy, fz, _) in zip(sample.feet, sample.forces):
                 if math.hypot(fx, fy) > mu * fz:

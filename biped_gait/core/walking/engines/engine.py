@@ -14,10 +14,13 @@ states in the step's model coordinates (q, qd of the single-support tree). Units
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+
+from ...dynamics.closed_chain import ClosedChain
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,14 +34,25 @@ class Pulse:
 
 
 @dataclass(frozen=True, eq=False)
+class Held:
+    """Both foot tips held (the closed chain ``chain``, core/dynamics/closed_chain.py), the actuated
+    joints driven by the feedback law ``law(q, qd)`` (N m)."""
+
+    chain: ClosedChain
+    law: Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True, eq=False)
 class Motion:
     """What the engine integrates in a phase: the single-support tree (the stance tip held, the
-    paper's model) driven by ``pulses`` (none: ballistic, as the paper's single support); ``h``
-    (s) the RK8 step of the planner's model (its grid: the aimed period over the walk's steps per
+    paper's model) driven by ``pulses`` (none: ballistic, as the paper's single support), or with
+    ``held`` both tips held and the joints driven by its law; ``h`` (s) the integration step of the
+    planner's model (its RK8 grid in a single support: the aimed period over the walk's steps per
     period)."""
 
     h: float
     pulses: tuple[Pulse, ...] = ()
+    held: Held | None = None
 
 
 class Segment(Protocol):

@@ -1,9 +1,11 @@
 """The planner's own model as the walk's engine (``engine:=hybrid``, docs/model.md sections 8.2,
 8.3): the ballistic single support by the planner's RK8 flow, one grid step h = T / grid per
 call, and the touchdown guard located on each step's quintic Hermite interpolant (Brent's
-method, 1e-14 s) and landed on by an exact RK8 step from the grid step's start. The samples are
-the interpolant's at their instants, on each side of a push's velocity jump its own. The contact
-forces are not measured: the phases give them by the model's inverse dynamics.
+method, 1e-14 s) and landed on by an exact RK8 step from the grid step's start; both feet held
+(the closed chain of a ``Held`` motion, its joints driven by its law) by the classical RK4, one
+step h per call. The samples are the interpolant's at their instants, on each side of a push's
+velocity jump its own. The contact forces are not measured: the phases give them by the model's
+inverse dynamics.
 
 Units SI, rad; times in the step.
 """
@@ -40,9 +42,25 @@ class HybridSegment:
     touchdown: bool
 
 
+def held_step(motion: Motion, q: np.ndarray, qd: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """One classical RK4 step of ``h`` s of the closed chain of ``motion.held``, its joints driven by
+    its law at each stage."""
+    chain, law = motion.held.chain, motion.held.law
+
+    def rate(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return chain.forward(a, b, law(a, b))[0]
+
+    k1 = qd, rate(q, qd)
+    k2 = qd + h / 2 * k1[1], rate(q + h / 2 * k1[0], qd + h / 2 * k1[1])
+    k3 = qd + h / 2 * k2[1], rate(q + h / 2 * k2[0], qd + h / 2 * k2[1])
+    k4 = qd + h * k3[1], rate(q + h * k3[0], qd + h * k3[1])
+    return (q + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]),
+            qd + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]))
+
+
 class HybridEngine:
-    """The engine of ``hybrid``'s model (module docstring): ballistic phases only (a motion with
-    joint torques is refused)."""
+    """The engine of ``hybrid``'s model (module docstring): ballistic single supports, and phases
+    with both feet held (a single support with joint torques is refused)."""
 
     contact_friction = math.inf  # the planner's model holds the stance tip: its reaction is not checked
 
@@ -54,7 +72,7 @@ class HybridEngine:
         return HybridWorkspace()
 
     def begin(self, ws: HybridWorkspace, motion: Motion, origin: float, t: float, q: np.ndarray, qd: np.ndarray) -> None:
-        if motion.pulses:
+        if motion.pulses and motion.held is None:
             raise ValueError("the hybrid engine integrates the ballistic single support only: a phase with joint "
                              "torques needs the mujoco engine")
         ws.t, ws.q, ws.qd = t, q, qd
@@ -62,6 +80,13 @@ class HybridEngine:
     def advance(self, ws: HybridWorkspace, motion: Motion, t_stop: float, touchdown_after: float) -> HybridSegment:
         h, t = motion.h, ws.t
         dt = t_stop - t if t < t_stop < t + h else h
+        if motion.held is not None:
+            q, qd = held_step(motion, ws.q, ws.qd, dt)
+            chain, law = motion.held.chain, motion.held.law
+            qdd = [chain.forward(a, b, law(a, b))[0] for a, b in ((ws.q, ws.qd), (q, qd))]
+            nodes = (np.array([t, t + dt]), np.array([ws.q, q]), np.array([ws.qd, qd]), np.array(qdd))
+            ws.t, ws.q, ws.qd = t + dt, q, qd
+            return HybridSegment(nodes, ws.t, False)
         run = self.flow.propagate(ws.q, ws.qd, dt, keep_nodes=True)
         nodes = (run.nodes[0] + t, *run.nodes[1:])
         touchdown = self.hybrid.guard(touchdown_after).touchdown(nodes) if math.isfinite(touchdown_after) else None

@@ -96,6 +96,15 @@ class Phase:
     dynamics, a push's velocity jump with the stance tip held."""
 
     kind = SINGLE_SUPPORT
+    friction = math.inf
+    """The friction coefficient the samples' contact forces are checked against (with the engine's
+    own): inf for a single support, whose friction the plan judges; a phase whose feet the
+    planner's model holds checks the parameter set's."""
+
+    def first_state(self, aim) -> tuple[np.ndarray, np.ndarray]:
+        """(q, qd) where a walk that begins with this phase starts, aiming at ``aim``
+        (``state.Aim``): the start of its gait's step."""
+        return np.asarray(aim.orbit.q0), np.asarray(aim.orbit.qd_a)
 
     def motion(self, ctx: WalkContext, state: WalkState) -> Motion | None:
         """What the engine integrates from ``state``; None: the phase is instantaneous."""
