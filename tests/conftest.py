@@ -1,15 +1,31 @@
-"""Shared fixtures: one planner per parameter set and the default gait, solved once."""
+"""Shared fixtures: one planner per parameter set and the default gait, solved once; under
+pytest-xdist (tools/test.sh runs one worker per core), a ROS domain for each worker and the tests
+marked ``paced`` run alone."""
 
 from __future__ import annotations
 
+import fcntl
 import math
 import os
 import random
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
 
 # Every ROS process of the test session (this one and the nodes it starts) keeps DDS discovery
 # on this machine and uses a domain of its own, so parallel sessions do not see each other.
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 100)))
+# pytest-xdist's workers (gw0, gw1, ...) inherit the session's domain: worker k takes the k-th of
+# distinct domains in 1..232 (Fast DDS's range; 101 and 232 are coprime), so that the nodes of
+# two workers, which have the same names, never meet.
+WORKER = os.environ.get("PYTEST_XDIST_WORKER")
+if WORKER and "BIPED_GAIT_SESSION_DOMAIN" not in os.environ:
+    os.environ["BIPED_GAIT_SESSION_DOMAIN"] = os.environ["ROS_DOMAIN_ID"]
+    os.environ["ROS_DOMAIN_ID"] = str((int(os.environ["ROS_DOMAIN_ID"]) + 101 * int(WORKER[2:]) - 1) % 232 + 1)
+# The lock the workers share (the controller names it): a test marked ``paced`` holds it alone,
+# every other test shares it.
+os.environ.setdefault("BIPED_GAIT_TEST_LOCK", os.path.join(tempfile.gettempdir(), f"biped-gait-tests-{os.getpid()}"))
 
 import numpy as np
 import pytest
@@ -47,3 +63,37 @@ def impact_problem(planner: GaitPlanner, gait) -> ImpactProblem:
     z_d[3:5] = tip[:2] / np.linalg.norm(tip)  # the locked rotation about the foot-to-foot line
     return ImpactProblem(bm.mass_matrix(q_t), j1, j2, gait.double_support.xd_b, gait.double_support.xd_a, z_d,
                          ImpactLayout.of(bm))
+
+
+@contextmanager
+def _lock(exclusive: bool):
+    """The session's lock, shared or exclusive, with a turnstile that an exclusive taker holds
+    while it waits (so that the tests sharing the lock cannot keep a paced test waiting)."""
+    base = os.environ["BIPED_GAIT_TEST_LOCK"]
+    with open(base + ".turnstile", "a") as turnstile, open(base + ".lock", "a") as lock:
+        fcntl.flock(turnstile, fcntl.LOCK_EX)
+        if not exclusive:
+            fcntl.flock(turnstile, fcntl.LOCK_UN)
+        fcntl.flock(lock, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+            fcntl.flock(turnstile, fcntl.LOCK_UN)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """Under pytest-xdist, a test that checks real-time pacing (marker ``paced``) runs with no other
+    test running, from the set-up of its fixtures to their teardown; the others run side by side."""
+    if WORKER is None:
+        yield
+        return
+    with _lock(item.get_closest_marker("paced") is not None):
+        yield
+
+
+def pytest_unconfigure(config):
+    if WORKER is None:
+        for suffix in (".turnstile", ".lock"):
+            Path(os.environ["BIPED_GAIT_TEST_LOCK"] + suffix).unlink(missing_ok=True)

@@ -103,6 +103,7 @@ def planner(tmp_path_factory):
 
 
 # Signals ------------------------------------------------------------------------------------
+@pytest.mark.paced
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
     """Each round: a recording planner busy with an optimization and a queue of uncached
@@ -140,6 +141,7 @@ def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
     assert clean == ROUNDS, results
 
 
+@pytest.mark.paced
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_the_simulator_stops_cleanly_during_walks(planner, side, tmp_path, sig):
     """Each round: a simulator walking in real time, with a live subscriber of its joint states,

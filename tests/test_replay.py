@@ -127,6 +127,7 @@ def assert_paced(errors: np.ndarray) -> None:
     assert errors.max() < HICCUP_TOLERANCE, f"worst interval error {errors.max():.4f} s"
 
 
+@pytest.mark.paced
 def test_every_message_comes_back_as_recorded_with_its_timing(walk_bag, recorded, listener, tmp_path):
     assert listener.replay_to_the_end(tmp_path, list(TYPES), str(walk_bag)) == 0, (tmp_path / "replay.log").read_text()
     for topic in TYPES:
@@ -149,6 +150,7 @@ def test_every_message_comes_back_as_recorded_with_its_timing(walk_bag, recorded
     assert all(a[1] <= b[1] for a, b in zip(sequence, sequence[1:])), "published out of log-time order"
 
 
+@pytest.mark.paced
 def test_rate_two_halves_the_time_and_topics_filter(walk_bag, recorded, listener, tmp_path):
     [path] = walk_bag.glob("*.mcap")  # a bare .mcap file this time
     replayed = ["/joint_states", "/gait_events"]

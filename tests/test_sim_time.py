@@ -237,6 +237,7 @@ async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.
         return channels, received
 
 
+@pytest.mark.paced
 def test_live_view_and_recording_switched_at_run_time_and_the_walk_in_diagnostics(planner_node, side, tmp_path):
     """The parameter services of a walking simulator: the live view started (the robot description
     sent to a client that connects now) and stopped; a recording started (the latched topics first)

@@ -104,6 +104,7 @@ def test_the_recording_holds_what_was_published(twenty_steps):
     assert decoded == counts
 
 
+@pytest.mark.paced
 def test_an_independent_subscriber_sees_the_topics(planner_node, tmp_path):
     """Real time (factor 1), two steps: names, frames and the 500 Hz rate in wall time."""
     side = ClientSide("sim_topic_listener")

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Build the interface packages of msg_defs/ (ament_cmake, rosidl: tf2_msgs, then
+# Build the interface packages of msg_defs/ (ament_cmake, rosidl: tf2_msgs and
 # biped_gait_interfaces) against the ROS 2 Jazzy wheels and install them into the venv, which is
 # the ROS prefix. Needs cmake and a C/C++ compiler.
 set -euo pipefail
@@ -15,13 +15,20 @@ np_include=$("$PY" -c 'import numpy; print(numpy.get_include())')
          -e "s|/opt/python/cp311-cp311/include/python3.11|$py_include|g" "$f"
 done
 export AMENT_PREFIX_PATH=$VENV
-for pkg in tf2_msgs biped_gait_interfaces; do
-  build=build/$pkg
+build() {  # one package: configure, build, install (logs under build/<package>/)
+  local pkg=$1 build=build/$1
   mkdir -p "$build"
   cmake -S "msg_defs/$pkg" -B "$build" -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$VENV" -DCMAKE_INSTALL_PREFIX="$VENV" -DPython3_EXECUTABLE="$PY" \
-    -DBUILD_TESTING=OFF > "$build/configure.log" 2>&1 || { cat "$build/configure.log"; exit 1; }
-  cmake --build "$build" -j "$(nproc)" > "$build/build.log" 2>&1 || { tail -50 "$build/build.log"; exit 1; }
-  cmake --install "$build" > "$build/install.log" 2>&1 || { tail -50 "$build/install.log"; exit 1; }
-done
+    -DBUILD_TESTING=OFF > "$build/configure.log" 2>&1 || { cat "$build/configure.log"; return 1; }
+  cmake --build "$build" -j "$(nproc)" > "$build/build.log" 2>&1 || { tail -50 "$build/build.log"; return 1; }
+  cmake --install "$build" > "$build/install.log" 2>&1 || { tail -50 "$build/install.log"; return 1; }
+}
+# The two packages do not depend on each other: they build at once.
+build tf2_msgs & tf2=$!
+build biped_gait_interfaces & ours=$!
+failed=0
+wait "$tf2" || failed=1
+wait "$ours" || failed=1
+(( failed == 0 )) || exit 1
 "$PY" -c 'import tf2_msgs.msg, biped_gait_interfaces.srv, biped_gait_interfaces.msg, biped_gait_interfaces.action'

@@ -2,32 +2,90 @@
 # Create the project's environment in .venv (Python 3.11) with the pinned dependencies and the
 # biped_gait package installed in editable mode, and builds the ROS 2 interfaces of msg_defs/
 # into it (the venv is the ROS prefix). Idempotent: a second run only checks.
+#
+# The steps overlap on two cores: pip installs first the four wheels the native modules compile
+# against, then the ROS 2 wheels (with what they require, at the pinned versions), then the rest;
+# the native modules (tools/build_native.sh) compile from the first point on, the ROS interfaces
+# (tools/build_interfaces.sh) from the second. Each background step logs to build/<step>.log,
+# shown if it fails. Figures: docs/development.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON=${PYTHON:-python3}
 if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
+pip_install() {
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check "$@" 2>&1 | { grep -v "^WARNING: Location" || true; }
+}
+
+mkdir -p build
+pending=()  # "step pid stamp-file stamp" of each step running in the background
+start() {  # step stamp-file stamp command...: run the command in the background
+  local step=$1 file=$2 value=$3
+  shift 3
+  "$@" > "build/$step.log" 2>&1 &
+  pending+=("$step $! $file $value")
+}
+stop_pending() {  # on an early exit, the background steps and their compilers stop too
+  local job step pid
+  for job in "${pending[@]}"; do
+    read -r step pid _ <<< "$job"
+    pkill -TERM -P "$pid" 2> /dev/null || true
+    kill -TERM "$pid" 2> /dev/null || true
+  done
+}
+trap stop_pending EXIT
+finish() {  # wait for every background step; stamp those that succeeded
+  local failed=0 job step pid file value
+  for job in "${pending[@]}"; do
+    read -r step pid file value <<< "$job"
+    if wait "$pid"; then
+      echo "$value" > "$file"
+    else
+      echo "tools/setup.sh: $step failed (build/$step.log):" >&2
+      tail -40 "build/$step.log" >&2
+      failed=1
+    fi
+  done
+  pending=()
+  return "$failed"
+}
+
 stamp=.venv/.requirements.sha
 want=$(cat requirements.txt setup.py setup.cfg pyproject.toml | sha256sum | cut -d' ' -f1)
-if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
-  .venv/bin/python -m pip install --quiet --disable-pip-version-check -r requirements.txt 2>&1 | { grep -v "^WARNING: Location" || true; }
-  .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e . 2>&1 | { grep -v "^WARNING: Location" || true; }
-  echo "$want" > "$stamp"
-fi
+requirements_current=no
+[ "$(cat "$stamp" 2>/dev/null)" = "$want" ] && requirements_current=yes
 # The compiled twins of the ballistic flow and of the sample evaluation (C++ over the wheels'
-# Pinocchio), rebuilt when their sources change.
+# Pinocchio), rebuilt when their sources, their build or the wheels they compile against change.
+native_wheels=$(grep -E '^(libpinocchio|cmeel-boost|cmeel-eigen|pybind11)==' requirements.txt)
 nstamp=.venv/.native.sha
-nwant=$(cat biped_gait/core/dynamics/native/*.cpp tools/build_native.sh | sha256sum | cut -d' ' -f1)
+nwant=$({ cat biped_gait/core/dynamics/native/*.cpp tools/build_native.sh; echo "$native_wheels"; } | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$nstamp" 2>/dev/null)" != "$nwant" ] || ! ls biped_gait/core/dynamics/_flow_native*.so > /dev/null 2>&1 \
     || ! ls biped_gait/core/dynamics/_samples_native*.so > /dev/null 2>&1; then
-  bash tools/build_native.sh
-  echo "$nwant" > "$nstamp"
+  if [ "$requirements_current" = no ]; then
+    # shellcheck disable=SC2086  # one argument per pinned wheel
+    pip_install --no-deps $native_wheels
+  fi
+  start native "$nstamp" "$nwant" bash tools/build_native.sh
 fi
 # The ROS interfaces, rebuilt when their definitions change.
 istamp=.venv/.interfaces.sha
 iwant=$(find msg_defs tools/build_interfaces.sh -type f -print0 | sort -z | xargs -0 cat | sha256sum | cut -d' ' -f1)
 if [ "$(cat "$istamp" 2>/dev/null)" != "$iwant" ]; then
-  bash tools/build_interfaces.sh
-  echo "$iwant" > "$istamp"
+  if [ "$requirements_current" = no ]; then
+    # shellcheck disable=SC2046  # one argument per ROS 2 wheel (and catkin_pkg, which ament_cmake
+    # imports without requiring it)
+    pip_install -c requirements.txt $(grep -oE '^(ros-[A-Za-z0-9-]+|catkin-pkg)' requirements.txt)
+  fi
+  start interfaces "$istamp" "$iwant" bash tools/build_interfaces.sh
 fi
+if [ "$requirements_current" = no ]; then
+  pip_install -r requirements.txt
+  pip_install --no-deps --no-build-isolation -e .
+  echo "$want" > "$stamp"
+fi
+# The package's bytecode: where PYTHONDONTWRITEBYTECODE=1 no .pyc is written at import, and
+# every process a test or a launch starts would compile the package again (pip and the
+# interfaces' install compile what they put in site-packages). Up-to-date files are skipped.
+.venv/bin/python -m compileall -q biped_gait
+finish

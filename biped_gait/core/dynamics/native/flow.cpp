@@ -20,6 +20,10 @@ namespace py = pybind11;
 using Matrix = Eigen::MatrixXd;
 using Vector = Eigen::VectorXd;
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+// Vectors reach Pinocchio's algorithms as Eigen::Ref<const VectorXd>, the argument type of the
+// instantiations libpinocchio_default ships (PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION declares them
+// extern): called with plain vectors, each algorithm would be compiled again here for every joint type.
+using In = Eigen::Ref<const Vector>;
 
 class NativeFlow {
  public:
@@ -35,7 +39,7 @@ class NativeFlow {
   }
 
   Vector acceleration(const Vector& q, const Vector& qd) {
-    return pinocchio::aba(model_, data_, q, qd, tau_);
+    return pinocchio::aba(model_, data_, In(q), In(qd), In(tau_));
   }
 
   // Returns (q(T), qd(T), sens (18 x k) or None, evaluations, nodes q, qd, qdd ((steps+1) x n) or None).
@@ -97,12 +101,12 @@ class NativeFlow {
     out.topRows(n) = y.bottomRows(n);
     const Vector q = y.col(0).head(n), qd = y.col(0).tail(n);
     if (k) {
-      pinocchio::computeABADerivatives(model_, data_, q, qd, tau_);
+      pinocchio::computeABADerivatives(model_, data_, In(q), In(qd), In(tau_));
       out.col(0).tail(n) = data_.ddq;
       out.bottomRightCorner(n, k).noalias() = data_.ddq_dq * y.topRightCorner(n, k);
       out.bottomRightCorner(n, k).noalias() += data_.ddq_dv * y.bottomRightCorner(n, k);
     } else {
-      out.col(0).tail(n) = pinocchio::aba(model_, data_, q, qd, tau_);
+      out.col(0).tail(n) = pinocchio::aba(model_, data_, In(q), In(qd), In(tau_));
     }
   }
 

@@ -24,6 +24,10 @@ using Vector = Eigen::VectorXd;
 using Vector3 = Eigen::Vector3d;
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 using Rows = Eigen::Ref<const RowMatrix>;
+// Vectors reach Pinocchio's algorithms as Eigen::Ref<const VectorXd>, the argument type of the
+// instantiations libpinocchio_default ships (PINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION declares them
+// extern): called with plain vectors, each algorithm would be compiled again here for every joint type.
+using In = Eigen::Ref<const Vector>;
 
 namespace {
 
@@ -72,14 +76,14 @@ class NativeSamples {
     py::gil_scoped_release release;  // no Python object is touched in the loop: other threads run meanwhile
     for (int i = 0; i < n; ++i) {
       const Vector qi = q.row(i).transpose(), qdi = qd.row(i).transpose();
-      qdd.row(i) = pinocchio::aba(single_, single_data_, qi, qdi, tau_).transpose();
+      qdd.row(i) = pinocchio::aba(single_, single_data_, In(qi), In(qdi), In(tau_)).transpose();
       x.tail(single_.nq) = qi;
       xd.tail(single_.nv) = qdi;
       xdd.tail(single_.nv) = qdd.row(i).transpose();
-      const Vector& tau = pinocchio::rnea(extended_, extended_data_, x, xd, xdd);
+      const Vector& tau = pinocchio::rnea(extended_, extended_data_, In(x), In(xd), In(xdd));
       grf.row(i) << tau[0], tau[1], tau[2], extended_data_.f[1].angular()[2];
       yaw[i] = angular_momentum(x, xd)[2];
-      pinocchio::forwardKinematics(single_, single_data_, qi);
+      pinocchio::forwardKinematics(single_, single_data_, In(qi));
       height[i] = pinocchio::updateFramePlacement(single_, single_data_, swing_tip_).translation()[2];
       lowest[i] = lowest_link();
     }
@@ -92,7 +96,7 @@ class NativeSamples {
     const int n = rows(q, qd);
     Vector height(n), vz(n);
     for (int i = 0; i < n; ++i) {
-      pinocchio::forwardKinematics(single_, single_data_, q.row(i).transpose(), qd.row(i).transpose());
+      pinocchio::forwardKinematics(single_, single_data_, In(q.row(i).transpose()), In(qd.row(i).transpose()));
       height[i] = pinocchio::updateFramePlacement(single_, single_data_, swing_tip_).translation()[2];
       vz[i] = pinocchio::getFrameVelocity(single_, single_data_, swing_tip_, pinocchio::LOCAL_WORLD_ALIGNED)
                   .linear()[2];
@@ -113,7 +117,7 @@ class NativeSamples {
     for (int i = 0; i < n; ++i) {
       x.tail(single_.nq) = q.row(i).transpose();
       xd.tail(single_.nv) = qd.row(i).transpose();
-      pinocchio::forwardKinematics(single_, single_data_, x.tail(single_.nq), xd.tail(single_.nv));
+      pinocchio::forwardKinematics(single_, single_data_, In(x.tail(single_.nq)), In(xd.tail(single_.nv)));
       const pinocchio::SE3& pelvis = single_data_.oMi[pelvis_];
       position.row(i) = (pelvis.translation() + pelvis.rotation() * pelvis_offset_).transpose();
       const Eigen::Matrix3d rotation = mirror.asDiagonal() * pelvis.rotation() * mirror.asDiagonal();
@@ -135,8 +139,8 @@ class NativeSamples {
     Vector out(n);
     for (int i = 0; i < n; ++i) {
       const Vector qi = q.row(i).transpose(), qdi = qd.row(i).transpose();
-      out[i] = pinocchio::computeKineticEnergy(single_, single_data_, qi, qdi) +
-               pinocchio::computePotentialEnergy(single_, single_data_, qi);
+      out[i] = pinocchio::computeKineticEnergy(single_, single_data_, In(qi), In(qdi)) +
+               pinocchio::computePotentialEnergy(single_, single_data_, In(qi));
     }
     return out;
   }
@@ -151,7 +155,7 @@ class NativeSamples {
   // Angular momentum about the stance tip (the origin) at extended state (x, xd): h_G + c x p, as
   // the Python side writes it; leaves the CoM and h_G in the extended model's data.
   Vector3 angular_momentum(const Vector& x, const Vector& xd) {
-    const pinocchio::Force& hg = pinocchio::computeCentroidalMomentum(extended_, extended_data_, x, xd);
+    const pinocchio::Force& hg = pinocchio::computeCentroidalMomentum(extended_, extended_data_, In(x), In(xd));
     const Vector3& c = extended_data_.com[0];
     const Vector3 p = hg.linear();
     return hg.angular() + Vector3(c[1] * p[2] - c[2] * p[1], c[2] * p[0] - c[0] * p[2], c[0] * p[1] - c[1] * p[0]);
@@ -187,7 +191,7 @@ class NativePlacements {
     RowMatrix translation(n, 3 * joints), orientation(n, 4 * joints);
     py::gil_scoped_release release;  // no Python object is touched in the loop: other threads run meanwhile
     for (int i = 0; i < n; ++i) {
-      pinocchio::forwardKinematics(model_, data_, q.row(i).transpose());
+      pinocchio::forwardKinematics(model_, data_, In(q.row(i).transpose()));
       for (int j = 0; j < joints; ++j) {
         const pinocchio::SE3& placement = data_.liMi[j + 1];
         translation.block<1, 3>(i, 3 * j) = placement.translation().transpose();
