@@ -6,8 +6,7 @@ and the step width apart sideways, both legs straight, the torso not yawed, the 
 the pelvis and trunk pitched by the theta that puts the centre of mass over the line through both
 feet (the feet line): section 3's double-support configuration q(T) at that step length, arm
 amplitude 0. Its static torques: the actuated joints' torques and the feet's reactions that hold it
-against gravity (least squares where the feet share a force, e.g. the lateral one with legs of pitch
-joints only).
+against gravity, the torques of least norm (the feet's squeeze along the legs takes what it can).
 
 **Why a controller, and which.** With point feet, nothing holds the body's rotation about the feet
 line but the body's shape: the joint torques are internal and both reactions act on the line, so
@@ -116,11 +115,12 @@ def standing_pose(chain: ClosedChain, stance_length: float = STANCE_LENGTH, widt
     x = bm.ds_state(q)
     gravity = pin.rnea(chain.ds, chain.ds_data, x, bm.embed(zero), bm.embed(zero))[chain.at]
     c = chain.rows_of(q)
-    statics = np.hstack([chain.selection, c.T])
-    solved = np.linalg.lstsq(statics, gravity, rcond=None)[0]
-    na = len(chain.actuated)
-    return StandingPose(q, solved[:na], chain.full_force(solved[na:]), stance_length,
-                        configurations.width(width), theta)
+    # The torques of least norm: the feet's reactions (their squeeze along the legs included) take
+    # what they can, the joints the rest.
+    free = np.eye(bm.nq) - c.T @ np.linalg.pinv(c.T)  # the generalized forces the held tip cannot give
+    torque = np.linalg.pinv(free @ chain.selection) @ (free @ gravity)
+    held = np.linalg.lstsq(c.T, gravity - chain.selection @ torque, rcond=None)[0]
+    return StandingPose(q, torque, chain.full_force(held), stance_length, configurations.width(width), theta)
 
 
 def _linearization(chain: ClosedChain, pose: StandingPose, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
