@@ -9,6 +9,7 @@ import errno
 import shutil
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -151,6 +152,31 @@ def test_the_background_recorder_reports_a_full_disk_once_and_finishes_the_file(
     assert is_complete(recorder.path) and recorder.failure == errors[0]
     [(_, (datatype, count))] = open_bag(recorder.bag_dir).topics().items()
     assert datatype == JOINTS and 0 < count < 20_000
+
+
+def test_an_owners_on_failure_hears_of_a_full_disk_once_whichever_thread_writes(tmp_path):
+    """A node writes from its walk, its timers and its services: with ``on_failure`` the failure
+    goes to the owner once (not to whichever thread happened to write next), and no write or
+    ``close`` raises."""
+    heard = []
+    recorder = BackgroundRecorder(McapRecorder(tmp_path, "bag", chunk_size=2048, opener=FullDisk(room=20_000)),
+                                  on_failure=lambda error: heard.append(str(error)))
+    recorder.add_topic("/joint_states", JOINTS, [STREAM])
+
+    def writer(first: int) -> None:
+        for i in range(first, 20_000, 2):
+            recorder.write("/joint_states", joint_state(i), 10 + i)
+            if i % 1000 < 2:
+                time.sleep(0.05)  # the writer thread's turn
+
+    threads = [threading.Thread(target=writer, args=(k,)) for k in (0, 1)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    recorder.close()
+    assert len(heard) == 1 and "No space left on device" in heard[0] and recorder.failure == heard[0]
+    assert is_complete(recorder.path)
 
 
 def test_the_background_recorder_serializes_off_the_callers_path_and_drains_at_close(tmp_path):

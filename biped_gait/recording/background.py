@@ -12,7 +12,10 @@ caller for long).
 
 Failures are those of ``McapRecorder`` (a full disk, a deleted folder): the writer thread stops
 there, the file finished as far as it got, and the error (``RecordingError``, one line) is
-raised once, by the next ``write`` or by ``close``; later writes are ignored.
+reported once: to ``on_failure`` where the owner gives one (called on the writer thread, so that
+the failure reaches the owner whichever thread writes next: a node writes from its walk, its
+timers and its services), else raised by the next ``write`` or by ``close``. Later writes are
+ignored.
 """
 
 from __future__ import annotations
@@ -34,8 +37,10 @@ class BackgroundRecorder:
     """Queues messages for ``recorder`` and writes them from a thread of its own; ``add_topic``
     goes straight to the recorder. ``close`` writes what is queued, then finalizes the file."""
 
-    def __init__(self, recorder: McapRecorder | RecorderProcess, max_pending: int = MAX_PENDING) -> None:
+    def __init__(self, recorder: McapRecorder | RecorderProcess, max_pending: int = MAX_PENDING,
+                 on_failure: Callable[[RecordingError], None] | None = None) -> None:
         self.recorder = recorder
+        self._on_failure = on_failure
         self.bag_dir, self.path = recorder.bag_dir, recorder.path
         self._queue: deque[tuple[str, Payload, int] | SampleRows] = deque()
         self._max_pending = max_pending
@@ -63,7 +68,8 @@ class BackgroundRecorder:
 
     def write(self, topic: str, data: Payload, stamp_ns: int | None = None) -> None:
         """Queue ``data`` (CDR bytes, or a function giving them) on ``topic`` at ``stamp_ns``
-        (default: now); ``RecordingError`` once after the writer failed; nothing once closed."""
+        (default: now); ``RecordingError`` once after the writer failed (unless ``on_failure``
+        took it); nothing once closed."""
         self._enqueue((topic, data, time.time_ns() if stamp_ns is None else stamp_ns))
 
     def write_samples(self, samples: SampleRows) -> None:
@@ -103,14 +109,22 @@ class BackgroundRecorder:
                 self.recorder.write_many([entry if isinstance(entry, SampleRows) else _message(*entry)
                                           for entry in batch])
             except RecordingError as exc:
-                self._error = exc
+                self._failed(exc)
             except Exception as exc:  # noqa: BLE001  a payload that could not be serialized
-                self._error = RecordingError(f"recording failed: {self.path}: {type(exc).__name__}: {exc}")
+                self._failed(RecordingError(f"recording failed: {self.path}: {type(exc).__name__}: {exc}"))
                 self._finish_failed()
             with self._room:
                 self._room.notify_all()
             if closing or self._error is not None:
                 return
+
+    def _failed(self, error: RecordingError) -> None:
+        """The writer failed: ``error`` to ``on_failure`` (marked reported before any write can
+        see it), or kept for the next ``write`` or ``close`` to raise."""
+        self._reported = self._on_failure is not None
+        self._error = error
+        if self._on_failure is not None:
+            self._on_failure(error)
 
     def _finish_failed(self) -> None:
         try:

@@ -213,7 +213,8 @@ class GaitPlannerNode(Node):
         """Record from now on, to a new file under ``record_dir``; ``ValueError`` if it cannot."""
         stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
         try:
-            recorder = BackgroundRecorder(McapRecorder(self._record_dir, f"planner_{stamp}"))
+            recorder = BackgroundRecorder(McapRecorder(self._record_dir, f"planner_{stamp}"),
+                                          on_failure=lambda error: self.get_logger().error(f"{error}; serving without recording"))
         except RecordingError as exc:
             raise ValueError(str(exc)) from None
         for publisher in self._recordings:
@@ -372,12 +373,10 @@ class GaitPlannerNode(Node):
         self._record(lambda: self.call_recorder.record_later(call, stamp.nanoseconds), self.call_recorder.topic)
 
     def _record(self, action: Callable[[], None], topic: str) -> None:
-        """Publish or record (``action``); a failure is logged (a recording failure once: the
-        recorder stops), never raised."""
+        """Publish or record (``action``); a failure is logged, never raised (a recording failure
+        is the recorder's ``on_failure``, logged once: the recorder stops)."""
         try:
             action()
-        except RecordingError as exc:
-            self.get_logger().error(f"{exc}; serving without recording")
         except Exception as exc:  # noqa: BLE001  the answer matters more than its record
             self.get_logger().error(f"publishing or recording on {topic} failed: {clip(repr(exc))}")
 
