@@ -15,7 +15,7 @@ before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, U
 names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
 (biped_gait_interfaces/AngularMomentum), ``/gait_events`` (biped_gait_interfaces/GaitEvent),
 ``/gait_phase`` (biped_gait_interfaces/GaitPhase: which foot stands, the step, the double
-supports), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
+supports, or standing), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
 ``/robot_description`` (std_msgs/String) and ``/tf_static``. The recording (MCAP, rosbag2
 directory under ``record_dir``, handed over by a thread to a recorder process of its own) holds
 the same bytes as were published, of every topic but ``/clock`` (``sim_clock``), and so does
