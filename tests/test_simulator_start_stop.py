@@ -91,7 +91,7 @@ def test_no_cmd_vel_for_the_timeout_is_a_command_of_0(planner_node, tmp_path):
         side.close()
     log = log_file.read_text()
     lapses = [line for line in log.splitlines() if "no /cmd_vel for" in line]
-    print("\n" + lapses[0])
+    print("\n" + lapses[0] + f"\ncommanded speed after it: {commanded[-1]} m/s (the envelope's slowest)")
     assert len(lapses) == 1 and "taken as 0 m/s" in lapses[0]
     silent = float(lapses[0].split("no /cmd_vel for ")[1].split(" s")[0])
     assert 0.5 <= silent <= 0.5 + 0.6  # the timeout, and at most a step (the gaits' periods are below 0.6 s)
