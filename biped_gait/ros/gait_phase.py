@@ -1,7 +1,8 @@
 """The simulator's gait phase topic (biped_gait_interfaces/GaitPhase, after the convention of
 biped_interfaces/Phase): published when a phase begins, i.e. at the first sample of a step's
-phase (the stance foot of a single support, both feet of a double support that lasts) and at each
-touchdown (the instantaneous double support). No physics here."""
+phase (the stance foot of a single support, both feet of a double support that lasts, ``STANDING``
+while the robot stands: once, at its first sample) and at each touchdown (the instantaneous double
+support). No physics here."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from std_msgs.msg import Header
 
 from biped_gait_interfaces.msg import GaitPhase
 
-from ..core.walking.events import SINGLE_SUPPORT
+from ..core.walking.events import SINGLE_SUPPORT, STANDING
 from ..core.walking.world import WORLD_FRAME
 from .walk_messages import stamp_msg
 
@@ -31,7 +32,8 @@ class GaitPhases:
     def sample(self, step: int, stance_side: str, kind: str, t: float, start_ns: int) -> None:
         """A sample of ``step`` at ``t`` (s in the walk), of a phase of ``kind``
         (``events.PHASE_KINDS``): that phase begins if it is its first."""
-        phase = GaitPhase.DOUBLE_STANCE if kind != SINGLE_SUPPORT else STANCE[stance_side]
+        phase = (STANCE[stance_side] if kind == SINGLE_SUPPORT else GaitPhase.STANDING if kind == STANDING
+                 else GaitPhase.DOUBLE_STANCE)
         if (step, phase) != self._phase:
             self._phase = (step, phase)
             self._publish(phase, step, t, start_ns)

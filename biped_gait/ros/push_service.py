@@ -4,9 +4,10 @@ pushes of its ``pushes`` parameter, handed to the walker before the step they ac
 
 The walker integrates a step before its samples are published (at the real-time factor), so a
 push asked for while a step is shown acts in the first step not yet integrated, at its phase: a
-fraction of the planned period T of the gait walked. The service answers once the walker has
-taken the push (the step and the walk time it acts at), or ``success = false`` if the robot is
-not walking.
+fraction of the planned period T of the gait walked. A standing robot makes no steps (its step is
+0): a push acts phase x T after the end of what has been integrated, and a scripted push of step 0
+phase x T after the standing's start. The service answers once the walker has taken the push
+(the step and the walk time it acts at), or ``success = false`` if the robot is not walking.
 """
 
 from __future__ import annotations
@@ -81,9 +82,11 @@ class PushScheduler:
         self._lock = threading.Lock()
         self._requests: list[_Request] = []
         self._walking = False
+        self._scripted_step: int | None = None  # the step whose scripted pushes were given last
 
     def start(self) -> None:
         """The walk began: service calls are taken from now on."""
+        self._scripted_step = None
         with self._lock:
             self._walking = True
 
@@ -115,16 +118,19 @@ class PushScheduler:
         return request.answer
 
     def before_step(self, walker: Walker) -> None:
-        """Give ``walker`` the pushes of the step it is about to walk."""
-        step, start, period = walker.state.step, walker.state.t, walker.period
-        for scripted in self.scripted:
-            if scripted.step == step:
-                walker.push(Push(scripted.impulse, scripted.phase * period))
+        """Give ``walker`` the pushes of the step it is about to walk (or, standing, of what it is
+        about to integrate from ``t_step`` s into its step on)."""
+        step, start, period, offset = walker.state.step, walker.state.t, walker.period, walker.state.t_step
+        if step != self._scripted_step:
+            self._scripted_step = step
+            for scripted in self.scripted:
+                if scripted.step == step:
+                    walker.push(Push(scripted.impulse, scripted.phase * period))
         with self._lock:
             waiting, self._requests = self._requests, []
         for request in waiting:
-            walker.push(Push(request.impulse, request.phase * period))
-            when = start + request.phase * period
+            walker.push(Push(request.impulse, offset + request.phase * period))
+            when = start + offset + request.phase * period
             request.answer = (True, f"push of {np.round(request.impulse, 6).tolist()} N s in step {step} at "
                               f"t = {when:.4f} s", step, when)
             request.taken.set()

@@ -15,7 +15,7 @@ before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, U
 names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
 (biped_gait_interfaces/AngularMomentum), ``/gait_events`` (biped_gait_interfaces/GaitEvent),
 ``/gait_phase`` (biped_gait_interfaces/GaitPhase: which foot stands, the step, the double
-supports), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
+supports, or standing), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
 ``/robot_description`` (std_msgs/String) and ``/tf_static``. The recording (MCAP, rosbag2
 directory under ``record_dir``, handed over by a thread to a recorder process of its own) holds
 the same bytes as were published, of every topic but ``/clock`` (``sim_clock``), and so does
@@ -24,11 +24,15 @@ arrays and their messages are serialized at once (``walk_messages``). Controls: 
 ``~/resume``, ``~/reset`` and the step counter ``~/iterations`` (``sim_controls``). Every stamp
 and log time is on one clock, the simulated time (``SimClock.now_ns``).
 
-Starting and stopping: with ``start_from_rest`` the walk would begin standing, through a start
-step planned by the core (``start_stop``); ``/cmd_vel`` linear.x 0 asks it to stop. The core
-refuses both for the shipped parameter sets with the physical reason (docs/model.md section
-8.10), which the node logs: the walk then does not start (exit status 1), or walks on at the
-slowest gait.
+Standing, starting and stopping: with ``initial_state`` ``standing`` the robot stands at rest,
+both feet down, held by the core's balance controller (``core/walking/phases/standing.py``, the
+hybrid engine only), for ``stand_duration`` s (0: until stopped), publishing and recording as a
+walk does (``/gait_phase`` ``STANDING``, ``/odom`` at rest); pushes act on it with both feet held.
+A ``/cmd_vel`` that is not 0 asks it to start onto the plan's gait, and ``/cmd_vel`` linear.x 0
+asks a walk to stop: the core refuses both for the shipped parameter sets with the physical
+reason (``start_stop``, docs/model.md section 8.10), which the node logs once: the robot stands
+on, or walks on at the slowest gait. No ``/cmd_vel`` for ``cmd_vel_timeout`` s of simulated time
+counts as a command of 0 (``speed_command``).
 
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: ``engine``
@@ -89,14 +93,13 @@ from ..core.walking.pacing import Pacer
 from ..core.model.params import load_params, names_set, shipped_param_names
 from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
-from ..core.walking.start_stop import why_not
 from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
 from ..core.walking.events import CouldNotStart, Fell, Finished, StepSamples, Touchdown
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.runner import prepare_walking
-from ..core.walking.walk import ENGINES, PULSE_DURATION, Walk
+from ..core.walking.walk import ENGINES, INITIAL_STATES, PULSE_DURATION, Walk, check_initial_state
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
@@ -157,9 +160,12 @@ PARAMETERS = (
           choices=("momentum", "duration")),
     Param("momentum_rate", DEFAULT_RATE, "with recovery 'momentum': the momentum error's contraction per step "
           "(0: dead-beat)", 0.0, 0.99),
-    Param("start_from_rest", False, "start the walk from standing at rest (both feet down) through a start step "
-          "of its own (true/false; the core plans it and refuses it with the physical reason: docs/model.md "
-          "section 8.10); false: the walk starts on the gait's orbit"),
+    Param("initial_state", INITIAL_STATES[0], "how the walk begins: 'walking' (on the gait's orbit, at the start of "
+          "a step) or 'standing' (at rest, both feet down, held by the balance controller for stand_duration; "
+          "engine 'hybrid' only). A standing robot cannot start yet: /cmd_vel is refused with the physical reason "
+          "(docs/model.md section 8.10)", choices=INITIAL_STATES),
+    Param("stand_duration", 0.0, "with initial_state 'standing': how long the robot stands (s of simulated time, "
+          "to the next 0.1 s); 0: until stopped. steps counts the steps of a walk", 0.0, 1e6),
     Param("pushes", "", f"scripted pushes on the trunk: {SCRIPT_FORMAT} (step index, phase as a fraction of T in "
           "[0, 1), impulse in N s, world axes); also the ~/push service"),
     Param("speed_rule", SPEED_RULES[0], "how /cmd_vel speeds pick gaits: 'least_effort' (least W per metre among "
@@ -170,6 +176,9 @@ PARAMETERS = (
           "turn radius at least its inverse; models with hip roll and yaw joints)", 0.0, 2.0),
     Param("max_curvature_change", MAX_CURVATURE_CHANGE, "largest change of the walked gait's curvature per step (1/m)",
           0.001, 2.0),
+    Param("cmd_vel_timeout", 0.5, "once a /cmd_vel came, no /cmd_vel for this long counts as a command of 0 (s of "
+          "simulated time, taken before the next step; 0: never, a real value here, as in diff_drive_controller). "
+          "0 m/s asks for a stop, not possible yet: the walk goes on at the slowest gait", 0.0, 3600.0),
     Param("record", True, "record everything published but /clock to MCAP (true/false; at run time: false "
           "finishes the recording, true starts a new one, the latched topics first)", dynamic=True),
     Param("record_dir", topics.RECORD_DIR, "directory of the recordings (path)"),
@@ -203,6 +212,7 @@ class SimulatorNode(Node):
         self.walk_state = "starting"
         self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
+        check_initial_state(value["initial_state"], value["engine"])
         prepare_walking()  # what the walk loads once, now rather than when it starts
         gait = {name: value[name] for name in GAIT_NAMES}
         try:
@@ -215,6 +225,7 @@ class SimulatorNode(Node):
         self.rate = value["publish_rate"]
         self.rtf = value["real_time_factor"]
         self.steps = value["steps"]
+        self._standing = value["initial_state"] == "standing"
         self._own_params = value["params"]
         self._own_set = load_params(self._own_params) if self._own_params else None
         self._group = ReentrantCallbackGroup()
@@ -248,13 +259,14 @@ class SimulatorNode(Node):
         self.pub_description = publisher(String, topics.ROBOT_DESCRIPTION, LATCHED)
         self.pub_tf_static = publisher(TFMessage, topics.TF_STATIC, LATCHED)
         self.phases = GaitPhases(publisher(GaitPhase, topics.GAIT_PHASE, EVENTS))
+        self.clock = SimClock(self)
         self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"], value["max_curvature"],
-                                  value["max_curvature_change"], publisher)
+                                  value["max_curvature_change"], publisher, value["cmd_vel_timeout"],
+                                  self.clock.now_ns, self.rtf)
         self.create_subscription(Twist, topics.CMD_VEL, self.speed.on_twist, 10)
         self.create_service(Push, "~/push", self._on_push, callback_group=self._group)
         self.sampled = {topics.JOINT_STATES: self.pub_joints, topics.ODOM: self.pub_odom,
                         topics.ANGULAR_MOMENTUM: self.pub_momentum, topics.TF: self.pub_tf}
-        self.clock = SimClock(self)
         self.controls = SimControls(self, self._group, publisher(UInt64, topics.ITERATIONS, LATCHED), self.clock.now_ns)
         self._messages: SampleMessages | None = None  # the sampled topics' templates, made with the first walk
         self._actuated: tuple[str, ...] = ()  # the walked model's actuated joints: the events' impulses
@@ -318,8 +330,11 @@ class SimulatorNode(Node):
 
     def _report(self) -> Report:
         """The walk part of ``/diagnostics``."""
-        figures = {"state": "paused" if self.controls.paused and self.walk_state == "walking" else self.walk_state,
+        moving = self.walk_state in ("walking", "standing")
+        figures = {"state": "paused" if self.controls.paused and moving else self.walk_state,
                    "samples": self.controls.iterations, **self.stats.figures()}
+        commanded = self.speed.commanded
+        figures["commanded speed (m/s)"] = f"{commanded:.4f}" if commanded is not None else "none"
         recorder = self.recorder
         figures["recording"] = str(recorder.bag_dir) if recorder is not None else "off"
         figures["live_view"] = f"ws://{self.value['live_view_host']}:{self.live.port}" if self.live is not None else "off"
@@ -495,14 +510,16 @@ class SimulatorNode(Node):
         pacer = Pacer(self.rtf)
         plan = plans[0]
         circle = f", on a circle of radius {plan.turn_radius:g} m" if math.isfinite(plan.turn_radius) else ""
-        self.get_logger().info(
-            f"walking L = {plan.step_length:g} m, T = {plan.period:g} s, alpha = {math.degrees(plan.arm_amplitude):.2f} deg "
-            f"({orbit[0].mode}){circle}, {self.steps or 'unlimited'} steps at {self.rate:g} Hz, real-time factor "
-            f"{self.rtf:g}, engine {self._engine_text()}")
+        gait = (f"L = {plan.step_length:g} m, T = {plan.period:g} s, alpha = {math.degrees(plan.arm_amplitude):.2f} deg "
+                f"({orbit[0].mode}){circle}")
+        duration = self.value["stand_duration"]
+        what = (f"standing for {f'{duration:g} s' if duration else 'as long as the node runs'} (the gait to start onto: "
+                f"{gait})" if self._standing else f"walking {gait}, {self.steps or 'unlimited'} steps")
+        self.get_logger().info(f"{what} at {self.rate:g} Hz, real-time factor {self.rtf:g}, engine {self._engine_text()}")
         try:
             while True:
                 self.controls.take_reset()
-                self.walk_state = "walking"
+                self.walk_state = "standing" if self._standing else "walking"
                 ended = self._walk_once(orbit, start_ns, pacer)
                 if self._stopping() or not ended and not self.controls.reset_requested():
                     return
@@ -526,19 +543,16 @@ class SimulatorNode(Node):
         steer = self.value["reaim"] and self.value["recovery"] == "momentum"
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
                     momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step,
-                    engine=self.value["engine"], pulse_duration=self.value["pulse_duration"])
+                    engine=self.value["engine"], pulse_duration=self.value["pulse_duration"],
+                    initial_state=self.value["initial_state"], stand_duration=self.value["stand_duration"])
         if walk.world is not None and self._messages is None:
             self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
         if walk.model is not None:
             self._actuated = walk.model.actuated_names
-        if walk.walker is not None and self.value["start_from_rest"]:
-            self._not_started("cannot start from rest: " + why_not("start", walk.walker.hybrid, walk.walker.orbit,
-                                                                    walk.walker.grid))
-            return True
         offset = self.controls.iterations / self.rate  # s of simulated time before this walk
         base_ns = start_ns + round(offset * 1e9)  # the walk's t = 0
         if walk.walker is not None:
-            self.speed.start(walk.walker, orbit[0].params or None, base_ns)
+            self.speed.start(walk.walker, orbit[0].params or None, base_ns, walk.standing)
             self.pushes.start()
             self.phases.restart()
         pacer.delay(time.monotonic() - held)  # the pacing starts with the walk's first sample
@@ -569,10 +583,11 @@ class SimulatorNode(Node):
                 self.diagnostics.publish()
             elif isinstance(item, Finished):
                 self.walk_state = "finished"
+                done = f"stood {item.t:.3f} s" if walk.standing else f"{item.steps} steps"
                 self._event(GaitEvent.FINISHED, item.steps, item.stance_side, 0.0, base_ns, item.t,
-                            f"walked {item.steps} steps")
+                            done if walk.standing else f"walked {done}")
                 wall = pacer.elapsed()
-                self.get_logger().info(f"walk finished: {item.steps} steps, {offset + item.t:.3f} s simulated in "
+                self.get_logger().info(f"walk finished: {done}, {offset + item.t:.3f} s simulated in "
                                        f"{wall:.3f} s wall time (real-time factor {(offset + item.t) / wall:.2f})")
                 self.diagnostics.publish()
             elif isinstance(item, CouldNotStart):

@@ -16,12 +16,26 @@ linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop: the core plans
 from the walked gait (``start_stop.plan_stop``, in a thread of its own, once per gait) and says
 why it cannot be made (for the shipped parameter sets it cannot: docs/model.md section 8.10);
 the command is then walked as the slowest gait of the envelope, as before.
+
+**Standing** (the walk begins standing): no follower and no envelope; a command that is not 0
+asks for a start onto the walk's gait, which the core plans (``start_stop.plan_start``, in a
+thread, once) and refuses with its physical reason, logged once: the robot stands on.
+
+**Timeout** (as ros2_control's diff_drive_controller ``cmd_vel_timeout``): once a command came,
+no /cmd_vel for ``timeout`` s of simulated time counts as a command of 0, taken before the next
+step (so within the timeout and a step); logged once per lapse. 0 m/s asks for a stop, which is
+refused: the walk goes on at the slowest gait. ``timeout`` 0: never. A paced walk (real-time
+factor f > 0) that lags behind the wall clock catches up in a burst of simulated time: the
+silence counted is then at most f times the wall time since the command, so that a publisher
+that kept its rate is not timed out by the burst.
 """
 
 from __future__ import annotations
 
 import math
 import threading
+import time
+from collections.abc import Callable
 
 from biped_gait_interfaces.msg import VelocityEnvelope
 from geometry_msgs.msg import Twist
@@ -31,6 +45,8 @@ from std_msgs.msg import Header
 from ..core.dynamics.hybrid import HybridStep
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.biped import BipedModel
+from ..core.model.params import BipedParams
+from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
@@ -46,24 +62,48 @@ class SpeedCommand:
     """/cmd_vel for ``node``'s walk: speed rule ``rule``, at most ``max_change`` (m/s) and
     ``max_curvature_change`` (1/m) of change of the aimed gait's speed and curvature per step,
     curvatures up to ``max_curvature`` (1/m); ``publisher`` makes the envelope's publisher
-    (message type, topic, QoS), recorded with the rest."""
+    (message type, topic, QoS), recorded with the rest; ``timeout``: s of simulated time without
+    a command that count as a command of 0 (0: never), on the clock ``now_ns`` (ns) of a walk
+    paced at ``factor`` (0: unpaced; module docstring)."""
 
     def __init__(self, node: Node, rule: str, max_change: float, max_curvature: float, max_curvature_change: float,
-                 publisher) -> None:
+                 publisher, timeout: float, now_ns: Callable[[], int], factor: float) -> None:
         self.node, self.rule, self.max_change = node, rule, max_change
         self.max_curvature, self.max_curvature_change = max_curvature, max_curvature_change
+        self.timeout, self._now_ns, self._factor = timeout, now_ns, factor
         self.follower: SpeedFollower | None = None
+        self._standing: Walker | None = None  # the walker of a walk that stands: commands are refused
         self._pending: tuple[float, float] | None = None  # a command that came before the walk started
         self._lock = threading.Lock()
+        self._last: tuple[int, float] | None = None  # when the last command came: simulated (ns), wall (s) times
+        self._lapsed = False  # the timeout has taken the last command as 0
         self._said_clamped: tuple[float, float] | None = None
         self._said_ignored: set[str] = set()
-        self._stop_checked: set[tuple[float, float]] = set()  # the gaits (L, T) a stop was planned from
+        self._explained: set[tuple[str, float, float]] = set()  # the starts and stops planned: (kind, L, T)
         self._grid = DEFAULTS.walk_steps
         self.pub_envelope = publisher(VelocityEnvelope, topics.VELOCITY_ENVELOPE, LATCHED)
 
-    def start(self, walker: Walker, source: str | None, stamp_ns: int) -> None:
+    @property
+    def commanded(self) -> float | None:
+        """The speed the walk is commanded (m/s, clamped; the walked gait's before any command),
+        None while standing or before the walk."""
+        follower = self.follower
+        return follower.commanded if follower is not None else None
+
+    def start(self, walker: Walker, source: str | None, stamp_ns: int, standing: bool = False) -> None:
         """Make the follower of ``walker``'s gait (``source``: its parameter set as given), and
-        publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time)."""
+        publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time); with
+        ``standing``, the walker stands: commands are refused (module docstring)."""
+        self._last, self._lapsed = None, False
+        if standing:
+            with self._lock:
+                self.follower, self._standing, pending = None, walker, self._pending
+                self._grid = walker.grid
+            self.node.get_logger().info("speed command: the robot stands; a command to walk is refused until a "
+                                        "start from standing is possible")
+            if pending is not None:
+                self._command(*pending)
+            return
         follower, note = follower_for(walker, DEFAULTS, self.rule, self.max_change, source, self.max_curvature,
                                       self.max_curvature_change)
         if note:
@@ -72,7 +112,7 @@ class SpeedCommand:
         self.pub_envelope.publish(envelope_msg(follower.envelope, follower.rule.describe(), stamp_msg(stamp_ns)),
                                   stamp_ns)
         with self._lock:
-            self.follower, pending = follower, self._pending
+            self.follower, self._standing, pending = follower, None, self._pending
             self._grid = walker.grid
         if pending is not None:
             self._command(*pending)
@@ -91,15 +131,24 @@ class SpeedCommand:
                                         f"{msg.linear.x}, {msg.angular.z}: ignored")
             return
         with self._lock:
-            if self.follower is None:
+            self._last, self._lapsed = (self._now_ns(), time.monotonic()), False
+            if self.follower is None and self._standing is None:
                 self._pending = (msg.linear.x, msg.angular.z)
                 return
         self._command(msg.linear.x, msg.angular.z)
 
     def _command(self, speed: float, yaw_rate: float) -> None:
+        standing = self._standing
+        if standing is not None:
+            if abs(speed) >= STOP_SPEED or yaw_rate:
+                self._explain("start", standing.orbit, standing.bm.params,
+                              f"speed command {speed:g} m/s, {yaw_rate:g} rad/s refused while standing: cannot start "
+                              "from standing onto", "standing on")
+            return
         follower = self.follower
         if speed < STOP_SPEED:
-            self._stop(follower)
+            self._explain("stop", follower.orbit, follower.bm.params, "speed command: cannot stop from",
+                          "walking on at the slowest gait")
         if yaw_rate and follower.envelope.max_curvature == 0.0 and "angular.z" not in self._said_ignored:
             self._said_ignored.add("angular.z")
             self.node.get_logger().warn("speed command: angular.z ignored: the model walks straight (turning needs "
@@ -112,29 +161,40 @@ class SpeedCommand:
                 f"({follower.envelope.describe()}): clamped to {walked:.3f} m/s, {turned:.3f} rad/s")
         self._said_clamped = (walked, turned) if clamped else None
 
-    def _stop(self, follower: SpeedFollower) -> None:
-        """A command to stop: plan the stop from the gait aimed at (once per gait, in a thread:
-        it takes a second or two) and log the outcome."""
-        orbit = follower.orbit
-        key = (orbit.step_length, orbit.period)
-        if key in self._stop_checked:
+    def _explain(self, kind: str, orbit: PlannedOrbit, params: BipedParams, what: str, then: str) -> None:
+        """A command to ``kind`` ('start' from standing onto ``orbit``, 'stop' from it): plan it
+        with the core (once per kind and gait, in a thread: it takes a second or two) and log why
+        it cannot be made, as ``what`` the gait: the reason; ``then``."""
+        key = (kind, orbit.step_length, orbit.period)
+        if key in self._explained:
             return
-        self._stop_checked.add(key)
+        self._explained.add(key)
         logger, grid = self.node.get_logger(), self._grid
 
         def plan() -> None:
-            hybrid = HybridStep(BipedModel.from_params(follower.bm.params))
-            reason = why_not("stop", hybrid, orbit, grid)
-            logger.warn(f"speed command: cannot stop from the gait L = {orbit.step_length:.3f} m, T = "
-                        f"{orbit.period:.3f} s: {reason}; walking on at the slowest gait")
+            reason = why_not(kind, HybridStep(BipedModel.from_params(params)), orbit, grid)
+            logger.warn(f"{what} the gait L = {orbit.step_length:.3f} m, T = {orbit.period:.3f} s: {reason}; {then}")
 
-        threading.Thread(target=plan, name="stop-plan", daemon=True).start()
+        threading.Thread(target=plan, name=f"{kind}-plan", daemon=True).start()
 
     def before_step(self, walker: Walker) -> None:
-        """One transition towards the commanded speed and turn, if the walker is not at them
-        (walker thread)."""
+        """One transition towards the commanded speed and turn, if the walker is not at them, the
+        timeout's 0 first if no command came for that long (walker thread)."""
         if self.follower is None:
             return
+        with self._lock:
+            last, silent = self._last, 0.0
+            if last is not None and not self._lapsed:
+                silent = (self._now_ns() - last[0]) * 1e-9
+                if self._factor > 0:
+                    silent = min(silent, self._factor * (time.monotonic() - last[1]))
+            lapsed = self.timeout > 0 and silent >= self.timeout
+            self._lapsed = self._lapsed or lapsed
+        if lapsed:
+            self.node.get_logger().warn(
+                f"speed command: no /cmd_vel for {silent:.3f} s of simulated time (cmd_vel_timeout {self.timeout:g} s): "
+                "taken as 0 m/s; stopping is not possible yet, so the walk goes on at the slowest gait")
+            self._command(0.0, 0.0)
         transition = self.follower.before_step(walker)
         if transition is not None and transition.failure:
             self.node.get_logger().warn(f"speed command: no transition before step {transition.step}: "

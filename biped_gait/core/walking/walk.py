@@ -3,9 +3,11 @@ simulator node; docs/model.md sections 8 and 11).
 
 ``Walk`` chooses the engine and the phases from the simulator's vocabulary (``engine``: the
 planner's model with the paper's impulsive double supports, or MuJoCo with the double support as
-torque pulses of ``pulse_duration``), runs the walk with the runner (``runner.Walker``), calls
-``before_step`` before each step (pushes, another gait to aim at), and gives each phase's samples
-with the robot in world terms (``world``).
+torque pulses of ``pulse_duration``; ``initial_state``: walking on the gait's orbit, or standing
+at rest held by the balance controller, ``phases.standing``), runs the walk with the runner
+(``runner.Walker``), calls ``before_step`` before each step (pushes, another gait to aim at; while
+standing, which has no steps, before each of its phases), and gives each phase's samples with the
+robot in world terms (``world``).
 """
 
 from __future__ import annotations
@@ -15,13 +17,16 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import DEFAULTS, Settings
 from ..model.biped import BipedModel
 from ..model.params import load_params
+from .balance import balance, standing_pose
 from .events import CouldNotStart, Fell, Finished, Sample, StepSamples, Touchdown
 from .orbit import Cycle, PlannedOrbit, as_cycle
 from .phases.pulses import Coast, Pulses
+from .phases.standing import Standing
 from .push import AppliedPush
 from .runner import Walker
 from .state import WalkState
@@ -32,6 +37,20 @@ ENGINES = ("hybrid", "mujoco")
 with the paper's impulsive double supports; ``mujoco``, MuJoCo on the exported stance tree
 (``engines/mujoco.py``), with the double support as torque pulses (``phases/pulses.py``)."""
 PULSE_DURATION = 5e-3  # s: the double support's duration d with the MuJoCo engine
+INITIAL_STATES = ("walking", "standing")
+"""How a walk begins: ``walking``, on the gait's orbit at the start of a step; ``standing``, at rest
+with both feet down, held by the balance controller (``phases.standing``) until the walk ends: a
+start from standing onto the gait is not possible yet (``start_stop``, docs/model.md section 8.10)."""
+
+
+def check_initial_state(initial_state: str, engine: str) -> None:
+    """``ValueError`` (one line) if a walk cannot begin in ``initial_state`` with ``engine``."""
+    if initial_state not in INITIAL_STATES:
+        raise ValueError(f"unknown initial state {initial_state!r}: use one of {', '.join(INITIAL_STATES)}")
+    if engine not in ENGINES:
+        raise ValueError(f"unknown engine {engine!r}: use one of {', '.join(ENGINES)}")
+    if initial_state == "standing" and engine != "hybrid":
+        raise ValueError(f"standing is walked by the hybrid engine only, not yet by {engine}: use engine hybrid")
 
 
 class Walk:
@@ -45,22 +64,28 @@ class Walk:
     start) describe the robot. ``momentum_rate``: the walk's momentum steering (``Walker``);
     ``before_step``: called with the walker before each step (pushes to apply, a gait to aim at:
     ``Walker.push``, ``Walker.retarget``); ``engine``: one of ``ENGINES``, with ``pulse_duration``
-    (s) the MuJoCo walk's double support (``phases.pulses``).
+    (s) the MuJoCo walk's double support (``phases.pulses``); ``initial_state``: one of
+    ``INITIAL_STATES`` (``standing``: the walk stands for ``stand_duration`` s of simulated time,
+    to the end of the standing phase that reaches it, 0 meaning never; ``steps`` is not used, a
+    standing robot making none).
     """
 
     def __init__(self, orbit: PlannedOrbit | Cycle, rate: float, steps: int = 0, reaim: bool = True,
                  settings: Settings = DEFAULTS, momentum_rate: float | None = None,
                  before_step: Callable[[Walker], object] | None = None, engine: str = "hybrid",
-                 pulse_duration: float = PULSE_DURATION) -> None:
-        if engine not in ENGINES:
-            raise ValueError(f"unknown engine {engine!r}: use one of {', '.join(ENGINES)}")
+                 pulse_duration: float = PULSE_DURATION, initial_state: str = INITIAL_STATES[0],
+                 stand_duration: float = 0.0) -> None:
+        check_initial_state(initial_state, engine)
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
         if steps < 0:
             raise ValueError(f"steps must be 0 (no end) or positive, got {steps}")
+        if not stand_duration >= 0:
+            raise ValueError(f"the standing's duration must be 0 (no end) or positive, got {stand_duration}")
         cycle = as_cycle(orbit)
         first = Coast(Pulses(pulse_duration)) if engine == "mujoco" else None
         self.orbit, self.rate, self.steps = cycle[0], rate, steps
+        self.standing, self.stand_duration = initial_state == "standing", stand_duration
         self.before_step = before_step
         self.problem = ""
         self.model: BipedModel | None = None
@@ -82,6 +107,13 @@ class Walk:
         if engine == "mujoco":
             from .engines.mujoco import MujocoEngine  # MuJoCo is loaded only for its walks
             stepper = MujocoEngine(hybrid, rate)
+        if self.standing:
+            chain = ClosedChain(self.model, hybrid.exchange)
+            try:
+                first = Standing(balance(chain, standing_pose(chain)))
+            except ValueError as exc:  # BalanceError: the posture cannot be held
+                self.problem = str(exc)
+                return
         self.walker = Walker(hybrid, cycle, rate, reaim, settings, momentum_rate, stepper, first)
 
     def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
@@ -99,8 +131,8 @@ class Walk:
             yield CouldNotStart(self.problem)
             return
         walker, prepared, last = self.walker, None, 0.0
-        while self.steps == 0 or walker.state.step < self.steps:
-            if self.before_step is not None and walker.state.step != prepared:  # a step begins
+        while not self._done(walker):
+            if self.before_step is not None and (self.standing or walker.state.step != prepared):  # a step begins
                 prepared = walker.state.step
                 self.before_step(walker)
             s = walker.state
@@ -111,7 +143,13 @@ class Walk:
                 yield Fell(s.step, last, last - s.t, s.stance_side, run.fall)
                 return
             yield from run.events
-        yield Finished(walker.state.step, walker.state.t, walker.state.stance_side)
+        yield Finished(walker.state.step, walker.state.t + walker.state.t_step, walker.state.stance_side)
+
+    def _done(self, walker: Walker) -> bool:
+        """Whether the walk has made its steps, or stood its duration."""
+        if self.standing:
+            return 0 < self.stand_duration <= walker.state.t + walker.state.t_step + 1e-9
+        return 0 < self.steps <= walker.state.step
 
     def _split(self, samples: list[Sample], pushes: tuple[AppliedPush, ...],
                s: WalkState) -> Iterator[StepSamples | AppliedPush]:
