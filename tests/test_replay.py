@@ -235,10 +235,11 @@ def test_loop_restamps_forward_and_clock_follows_the_recording(walk_bag, recorde
     log_times = np.array([t for t, _ in recorded["/joint_states"]])
     start = min(messages[0][0] for messages in recorded.values() if messages)
     span = log_times[-1] - start + np.min(np.diff(log_times))
-    # each stamp received is a recorded one moved by whole passes (a best-effort sample may be lost
-    # on a busy machine, so the passes are told by their stamps, not by counting)
+    # each stamp received is a recorded one moved by whole passes (the first passes may go by before
+    # discovery matches this listener, and a best-effort sample may be lost on a busy machine, so
+    # the passes are told by their stamps, not by counting)
     passes, offset = np.divmod(stamps - recorded_stamps[0], span)
     assert np.all(np.isin(offset, recorded_stamps - recorded_stamps[0])), "a stamp off the recorded ones moved by passes"
-    assert passes[0] == 0 and passes[-1] >= 2
+    assert passes[-1] - passes[0] >= 2
     assert len(clocks) > 20 and np.all(np.diff(clocks) >= 0) and clocks[0] >= start
     assert clocks[-1] > start + span  # the clock runs on through the loops
