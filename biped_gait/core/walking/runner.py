@@ -8,9 +8,9 @@ integration step at a time until the phase's guard fires, cutting the steps at t
 velocity jump, ``push``) and collecting the publishing instants k / rate of the walk, which the
 engine's output gives at the phase's end (one call: the hybrid engine's interpolant, MuJoCo's
 records); the phase gives the contact forces at them (unless the engine measured them) and the
-lowest link, and the first sample that falls (a foot's vertical reaction not positive, a link
-below the ground after the first 5 % of the step, a measured contact force out of the friction
-cone) ends the walk. Then the phase's reset returns the transition, a value: the next phase, the
+lowest link, and the first sample that falls (a foot's vertical reaction not positive, a foot
+the engine measures sliding more than ``SLIP_LIMIT``, a link below the ground after the first 5 %
+of the step, a contact force out of the friction cone) ends the walk. Then the phase's reset returns the transition, a value: the next phase, the
 walk's state, the events (a touchdown ends a step).
 
 Between steps the runner can be given pushes on the trunk at times in the next step (``push``) and
@@ -40,6 +40,9 @@ from .push import AppliedPush, Push, TrunkPush
 from .state import WalkState
 
 LINKS_CHECKED_AFTER = 0.05  # of the aimed period: a link below the ground is a fall from then on (not at the toe-off)
+SLIP_LIMIT = 1e-3
+"""m: a foot an engine measures sliding farther than this from where it was put down has slipped
+(MuJoCo's feet creep 1 um in 5 s of standing)."""
 
 
 def prepare_walking() -> None:
@@ -241,29 +244,34 @@ class Walker:
         ctx = self.context
         q, qd, measured = self.engine.sample(self._workspace, segments, taus, jumps)
         forces, lowest = phase.evaluate(ctx, q, qd)
+        slip = None
         if measured is not None:
-            forces = measured
+            forces, slip = measured.forces, measured.slip
         feet = phase.feet(s)
         friction = min(self.engine.contact_friction, phase.friction)
         checked_after = LINKS_CHECKED_AFTER * s.aim.period
         for k, tau in enumerate(taus):
             samples.append(Sample(s.t + tau, tau, q[k], qd[k], forces[k], feet, s.step, phase.kind))
             self.sample_index += 1
-            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction)
+            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction, None if slip is None else slip[k])
             if fall:
                 return samples, fall
         return samples, ""
 
     @staticmethod
-    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float) -> str:
+    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float, slip: np.ndarray | None) -> str:
         """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
         lowest knee, hip, shoulder or hand, checked after ``checked_after`` s in the step; ``mu``:
-        the friction coefficient its contact forces must keep within (inf: none checked)."""
+        the friction coefficient its contact forces must keep within (inf: none checked); ``slip``:
+        how far each foot has slid (m, measured by the engine; None: held)."""
         several = len(sample.feet) > 1
         for foot, force in zip(sample.feet, sample.forces):
             if not force[2] > 0.0:
                 at = f" at the {foot.side} foot" if several else ""
                 return f"vertical ground reaction{at} not positive ({force[2]:.3g} N) at t = {sample.t:.4f} s"
+        for foot, distance in zip(sample.feet, () if slip is None else slip):
+            if distance > SLIP_LIMIT:
+                return f"the {foot.side} foot slid {distance * 1e3:.1f} mm at t = {sample.t:.4f} s"
         if sample.t_step > checked_after and lowest_link < 0.0:
             return f"a link went below the ground at t = {sample.t:.4f} s"
         if math.isfinite(mu):
