@@ -59,11 +59,11 @@ class Motion:
 class Contacts:
     """What an engine measures of the feet on the ground at the samples (n of them): the contact
     force [Fx, Fy, Fz, Mz] at each (n x feet x 4: N, N m, the step's model axes, the stance foot
-    first), and how far each has slid on the ground from where it was put down (n x feet, m; None:
-    the engine holds it there)."""
+    first), and how far each tip has moved from where it was put down (n x feet x 3, m, the step's
+    model axes; None: the engine holds it there)."""
 
     forces: np.ndarray
-    slip: np.ndarray | None = None
+    moved: np.ndarray | None = None
 
 
 class Segment(Protocol):

@@ -19,6 +19,12 @@ pivot does; the contact is checked instead, at every sample, from MuJoCo's own r
 runner checks it positive and within the friction cone of the parameter set
 (``contact_friction``).
 
+**Both feet held** (a ``Held`` motion: standing, docs/model.md section 13.2): MuJoCo integrates the
+floating export instead, both point feet on its floor by its own contacts (``floating``: the
+contact forces with friction are MuJoCo's, nothing holds a foot but them), the held law's torques
+on its motors from the model's state measured at each MuJoCo step (held until the step's end), each
+foot's contact force and how far its tip moved from where it was put down measured at the samples.
+
 **The touchdown**: where MuJoCo's swing tip reaches the floor, located by Brent's method on
 MuJoCo's last step redone in part (1e-15 s); **the passive impact** there: eqs. (8)-(9) with
 MuJoCo's D_e and J2 (the ``extended`` export), then the leg exchange.
@@ -48,13 +54,13 @@ RECORD_MATCH = 1e-9  # s: a sample's instant and the grid node MuJoCo stepped to
 class Record:
     """MuJoCo's state at a node of the publishing grid: time in the walk (s), q, qd, the reaction
     [Fx, Fy, Fz, Mz] at each foot on the ground (feet x 4: N, N m, model axes; the stance foot
-    first), and how far each has slid from where it was put down (feet, m; None: held there)."""
+    first), and how far each tip has moved from where it was put down (feet x 3, m; None: held there)."""
 
     t: float
     q: np.ndarray
     qd: np.ndarray
     forces: np.ndarray
-    slip: np.ndarray | None = None
+    moved: np.ndarray | None = None
 
 
 @dataclass
@@ -163,8 +169,7 @@ class MujocoEngine:
             if ws.held is not None:  # the contact forces with the torques applied now
                 floating, d = self.floating, ws.floor
                 mujoco.mj_forward(floating.model, d)
-                slip = np.linalg.norm((floating.tips(d) - ws.placed)[:, :2], axis=1)
-                ws.records.append(Record(ws.t, *ws.measured, floating.contact_forces(d), slip))
+                ws.records.append(Record(ws.t, *ws.measured, floating.contact_forces(d), floating.tips(d) - ws.placed))
             else:
                 ws.records.append(Record(ws.t, ws.data.qpos.copy(), ws.data.qvel.copy(), self._reaction(ws)))
 
@@ -243,9 +248,9 @@ class MujocoEngine:
             if k == len(records) or records[k].t > t + RECORD_MATCH:
                 raise RuntimeError(f"MuJoCo did not step to the sample's instant {t:.9f} s")
             rows.append(records[k])
-        slip = None if any(r.slip is None for r in rows) else np.array([r.slip for r in rows])
+        moved = None if any(r.moved is None for r in rows) else np.array([r.moved for r in rows])
         return (np.array([r.q for r in rows]), np.array([r.qd for r in rows]),
-                Contacts(np.array([r.forces for r in rows]), slip))
+                Contacts(np.array([r.forces for r in rows]), moved))
 
     def passive_impact(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """Eqs. (8)-(9) at ``q`` from ``qd`` with MuJoCo's D_e and J2 (the ``extended`` export; a
