@@ -256,7 +256,8 @@ class Walker:
         for k, tau in enumerate(taus):
             samples.append(Sample(s.t + tau, tau, q[k], qd[k], forces[k], feet, s.step, phase.kind))
             self.sample_index += 1
-            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction, None if moved is None else moved[k])
+            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction,
+                              None if moved is None else moved[k])
             if fall:
                 return samples, fall
         return samples, ""

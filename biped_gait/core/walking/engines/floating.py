@@ -10,11 +10,11 @@ section 5, the same motion: the robot is symmetric).
 **The state measured** (``measure``): the model's coordinates are the joints' angles (each the
 URDF joint's, ``urdf.UrdfJoints``, its sign) and the stance ankle's roll and pitch: the stance
 shin's orientation in the world as intrinsic yaw, roll, pitch (z, x, y: the stance tree's ankle is
-a roll, then a pitch; in closed form, a fiftieth of SciPy's ``Rotation`` call), its yaw dropped (the model's pivot holds the foot's spin; MuJoCo's torsional
-friction holds it); their rates likewise, from the shin's angular velocity on those three axes. Where
-the tips are (a contact's penetration, a foot's creep) is not a coordinate: it shows as the
-measured state leaving the held rows, which the balance's minimal coordinates (their null space)
-do not see.
+a roll, then a pitch; in closed form, a fiftieth of SciPy's ``Rotation`` call), its yaw dropped
+(the model's pivot holds the foot's spin; MuJoCo's torsional friction holds it); their rates
+likewise, from the shin's angular velocity on those three axes. Where the tips are (a contact's
+penetration, a foot's creep) is not a coordinate: it shows as the measured state leaving the held
+rows, which the balance's minimal coordinates (their null space) do not see.
 
 Units SI, rad; forces N, moments N m.
 """
@@ -33,7 +33,7 @@ from ...model.urdf import UrdfJoints
 STANCE, SWING = "right", "left"  # MuJoCo's legs of the model's stance and swing legs
 NOSLIP_ITERATIONS = 20
 """MuJoCo's no-slip post-processing of the friction forces (``opt.noslip_iterations``): without it
-a soft contact's friction lets a loaded foot creep (the feet 1 mm apart in 5 s of standing)."""
+a soft contact's friction lets a loaded foot creep (the feet 1.1 mm further apart after 5 s of standing)."""
 TOUCH_MARGIN = 1e-9
 """m: the feet's contact margin: a foot placed touching the floor (at distance 0) is in contact from
 the start (MuJoCo makes a contact active below its margin, strictly; the floor moves by this much)."""
