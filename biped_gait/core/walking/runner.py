@@ -8,9 +8,9 @@ integration step at a time until the phase's guard fires, cutting the steps at t
 velocity jump, ``push``) and collecting the publishing instants k / rate of the walk, which the
 engine's output gives at the phase's end (one call: the hybrid engine's interpolant, MuJoCo's
 records); the phase gives the contact forces at them (unless the engine measured them) and the
-lowest link, and the first sample that falls (a foot's vertical reaction not positive, or, where
-the engine measures the feet's tips, one lifted or slid more than ``LIFT_LIMIT``, ``SLIP_LIMIT``; a
-link below the ground after the first 5 % of the step; a contact force out of the friction cone)
+lowest link, and the first sample that falls (a held foot's vertical reaction not positive or
+its force out of the friction cone; where the engine measures the feet's tips, one lifted or slid
+more than ``LIFT_LIMIT``, ``SLIP_LIMIT``; a link below the ground after the first 5 % of the step)
 ends the walk. Then the phase's reset returns the transition, a value: the next phase, the
 walk's state, the events (a touchdown ends a step).
 
@@ -263,12 +263,15 @@ class Walker:
         return samples, ""
 
     @staticmethod
-    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float, moved: np.ndarray | None) -> str:
+    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float,
+              moved: np.ndarray | None) -> str:
         """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
         lowest knee, hip, shoulder or hand, checked after ``checked_after`` s in the step; ``mu``:
-        the friction coefficient its contact forces must keep within (inf: none checked); ``moved``:
-        how far each foot's tip has moved from where it was put down (feet x 3, m, measured by the
-        engine; None: held there, its vertical reaction must then stay positive)."""
+        the friction coefficient a held foot's contact force must keep within (inf: none checked);
+        ``moved``: how far each foot's tip has moved from where it was put down (feet x 3, m,
+        measured by the engine, whose contacts keep their forces in their cone: a foot slides
+        instead; None: held there, its vertical reaction must then stay positive, its force in the
+        cone)."""
         several = len(sample.feet) > 1
         if moved is None:
             for foot, force in zip(sample.feet, sample.forces):
@@ -283,7 +286,7 @@ class Walker:
                     return f"the {foot.side} foot slid {math.hypot(dx, dy) * 1e3:.1f} mm at t = {sample.t:.4f} s"
         if sample.t_step > checked_after and lowest_link < 0.0:
             return f"a link went below the ground at t = {sample.t:.4f} s"
-        if math.isfinite(mu):
+        if math.isfinite(mu) and moved is None:
             for foot, (fx, fy, fz, _) in zip(sample.feet, sample.forces):
                 if math.hypot(fx, fy) > mu * fz:
                     return (f"the {'stance' if foot is sample.feet[0] else foot.side} foot slips at t = {sample.t:.4f} s: "
