@@ -104,3 +104,29 @@ def test_a_push_is_walked_off_in_mujoco(default_gait):
     assert len(pushes) == 1 and pushes[0].step == 1 and np.max(np.abs(pushes[0].delta_qd)) > 0.01
     assert pushes[0].time_in_step == pytest.approx(0.3 * default_gait.period, abs=1e-12)  # at its instant
     assert errors[2] > 1.0 and errors[-1] < 0.5  # knocked off, and back to the 5 ms walk's (0.27)
+
+
+@pytest.mark.parametrize("name", ["aoustin2013", "aoustin2013-hips"])
+def test_the_floating_robot_is_the_models_state(planner, hips, name):
+    """The model's state placed on MuJoCo's floor (engines/floating.py) is measured back to rounding,
+    the stance tip at the origin and the swing tip where the model has it; the joint torques do the
+    same power in both (the motors' signs are the coordinates')."""
+    import mujoco
+
+    from biped_gait.core.walking.engines.floating import FloatingRobot
+
+    chosen = planner if name == "aoustin2013" else hips
+    bm = chosen.model
+    floating = FloatingRobot(chosen.hybrid.samples, 1e-3)
+    data = floating.data()
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        q, qd, torque = rng.uniform(-0.4, 0.4, bm.nq), rng.normal(size=bm.nq), rng.normal(size=len(bm.actuated))
+        floating.place(data, q, qd)
+        measured_q, measured_qd = floating.measure(data)
+        assert np.max(np.abs(measured_q - q)) < 1e-12 and np.max(np.abs(measured_qd - qd)) < 1e-12
+        tips = floating.tips(data)
+        assert np.max(np.abs(tips[0])) < 1e-12 and np.max(np.abs(tips[1] - bm.swing_tip(q))) < 1e-12
+        floating.apply(data, torque)
+        mujoco.mj_forward(floating.model, data)
+        assert float(data.qfrc_actuator @ data.qvel) == pytest.approx(float(torque @ qd[bm.actuated]), abs=1e-10)

@@ -13,7 +13,8 @@ Pinocchio models (docs/model.md section 9), in two kinds:
   effort bound as its control range), the floor, a point foot at each shin's tip (a small sphere,
   ``exported.FOOT_RADIUS``, with the parameter file's friction and a torsional friction that holds
   the foot's spin, as the model's pivot does) and collision capsules on the limbs. The MuJoCo
-  engine of the simulator (``core/walking/engines/mujoco.py``) walks it.
+  engine stands it, both feet on its floor (``core/walking/engines/floating.py``, docs/model.md
+  section 13.2); it walks the ``stance`` tree.
 
 Both carry the table's joint ranges and the epsilon inertias of ``exported`` (stated in a comment
 of the file); a hip's joints sit in one body (MuJoCo composes a body's joints in order, as the

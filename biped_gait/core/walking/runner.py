@@ -8,9 +8,10 @@ integration step at a time until the phase's guard fires, cutting the steps at t
 velocity jump, ``push``) and collecting the publishing instants k / rate of the walk, which the
 engine's output gives at the phase's end (one call: the hybrid engine's interpolant, MuJoCo's
 records); the phase gives the contact forces at them (unless the engine measured them) and the
-lowest link, and the first sample that falls (a foot's vertical reaction not positive, a link
-below the ground after the first 5 % of the step, a measured contact force out of the friction
-cone) ends the walk. Then the phase's reset returns the transition, a value: the next phase, the
+lowest link, and the first sample that falls (a held foot's vertical reaction not positive or
+its force out of the friction cone; where the engine measures the feet's tips, one lifted or slid
+more than ``LIFT_LIMIT``, ``SLIP_LIMIT``; a link below the ground after the first 5 % of the step)
+ends the walk. Then the phase's reset returns the transition, a value: the next phase, the
 walk's state, the events (a touchdown ends a step).
 
 Between steps the runner can be given pushes on the trunk at times in the next step (``push``) and
@@ -40,6 +41,11 @@ from .push import AppliedPush, Push, TrunkPush
 from .state import WalkState
 
 LINKS_CHECKED_AFTER = 0.05  # of the aimed period: a link below the ground is a fall from then on (not at the toe-off)
+SLIP_LIMIT = LIFT_LIMIT = 1e-3
+"""m: a foot whose tip an engine measures (MuJoCo's contacts) may unload for an instant, lift and
+slide a little, as a real foot does; one that slid farther than ``SLIP_LIMIT`` from where it was
+put down, or rose higher than ``LIFT_LIMIT``, has fallen (standing, MuJoCo's feet creep 1 um in
+5 s)."""
 
 
 def prepare_walking() -> None:
@@ -241,32 +247,46 @@ class Walker:
         ctx = self.context
         q, qd, measured = self.engine.sample(self._workspace, segments, taus, jumps)
         forces, lowest = phase.evaluate(ctx, q, qd)
+        moved = None
         if measured is not None:
-            forces = measured
+            forces, moved = measured.forces, measured.moved
         feet = phase.feet(s)
         friction = min(self.engine.contact_friction, phase.friction)
         checked_after = LINKS_CHECKED_AFTER * s.aim.period
         for k, tau in enumerate(taus):
             samples.append(Sample(s.t + tau, tau, q[k], qd[k], forces[k], feet, s.step, phase.kind))
             self.sample_index += 1
-            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction)
+            fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction,
+                              None if moved is None else moved[k])
             if fall:
                 return samples, fall
         return samples, ""
 
     @staticmethod
-    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float) -> str:
+    def _fall(sample: Sample, lowest_link: float, checked_after: float, mu: float,
+              moved: np.ndarray | None) -> str:
         """Why ``sample`` is a fall ('' if it is not); ``lowest_link``: the height (m) of its
         lowest knee, hip, shoulder or hand, checked after ``checked_after`` s in the step; ``mu``:
-        the friction coefficient its contact forces must keep within (inf: none checked)."""
+        the friction coefficient a held foot's contact force must keep within (inf: none checked);
+        ``moved``: how far each foot's tip has moved from where it was put down (feet x 3, m,
+        measured by the engine, whose contacts keep their forces in their cone: a foot slides
+        instead; None: held there, its vertical reaction must then stay positive, its force in the
+        cone)."""
         several = len(sample.feet) > 1
-        for foot, force in zip(sample.feet, sample.forces):
-            if not force[2] > 0.0:
-                at = f" at the {foot.side} foot" if several else ""
-                return f"vertical ground reaction{at} not positive ({force[2]:.3g} N) at t = {sample.t:.4f} s"
+        if moved is None:
+            for foot, force in zip(sample.feet, sample.forces):
+                if not force[2] > 0.0:
+                    at = f" at the {foot.side} foot" if several else ""
+                    return f"vertical ground reaction{at} not positive ({force[2]:.3g} N) at t = {sample.t:.4f} s"
+        else:
+            for foot, (dx, dy, dz) in zip(sample.feet, moved):
+                if dz > LIFT_LIMIT:
+                    return f"the {foot.side} foot lifted {dz * 1e3:.1f} mm at t = {sample.t:.4f} s"
+                if math.hypot(dx, dy) > SLIP_LIMIT:
+                    return f"the {foot.side} foot slid {math.hypot(dx, dy) * 1e3:.1f} mm at t = {sample.t:.4f} s"
         if sample.t_step > checked_after and lowest_link < 0.0:
             return f"a link went below the ground at t = {sample.t:.4f} s"
-        if math.isfinite(mu):
+        if math.isfinite(mu) and moved is None:
             for foot, (fx, fy, fz, _) in zip(sample.feet, sample.forces):
                 if math.hypot(fx, fy) > mu * fz:
                     return (f"the {'stance' if foot is sample.feet[0] else foot.side} foot slips at t = {sample.t:.4f} s: "

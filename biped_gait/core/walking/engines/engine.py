@@ -55,6 +55,17 @@ class Motion:
     held: Held | None = None
 
 
+@dataclass(frozen=True, eq=False)
+class Contacts:
+    """What an engine measures of the feet on the ground at the samples (n of them): the contact
+    force [Fx, Fy, Fz, Mz] at each (n x feet x 4: N, N m, the step's model axes, the stance foot
+    first), and how far each tip has moved from where it was put down (n x feet x 3, m, the step's
+    model axes; None: the engine holds it there)."""
+
+    forces: np.ndarray
+    moved: np.ndarray | None = None
+
+
 class Segment(Protocol):
     """One integration step, as ``Engine.advance`` reports it."""
 
@@ -87,10 +98,10 @@ class Engine(Protocol):
         """Give the state the velocity ``qd`` (a push's jump), the configuration kept."""
 
     def sample(self, ws, segments: list[Segment], taus: list[float],
-               jumps: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+               jumps: list[float]) -> tuple[np.ndarray, np.ndarray, Contacts | None]:
         """The states (q, qd: rows) at ``taus`` (s in the step) in the phase's ``segments``, the
-        velocity jumping at the instants ``jumps``; and the contact forces (n x feet x 4) if the
-        engine measures them, else None."""
+        velocity jumping at the instants ``jumps``; and the feet's contacts if the engine measures
+        them, else None."""
 
     def passive_impact(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The next step's initial velocity (its coordinates, rad/s) after the passive impact of
