@@ -72,8 +72,6 @@ CASES = [
     ("biped-gait-simulator", ["--ros-args", "-p", "pulse_duration:=0.0"], "parameter pulse_duration: must be in [0.0001, 0.1]"),
     ("biped-gait-simulator", ["--ros-args", "-p", "initial_state:=sitting"],
      "parameter initial_state: must be one of walking, standing"),
-    ("biped-gait-simulator", ["--ros-args", "-p", "initial_state:=standing", "-p", "engine:=mujoco"],
-     "standing is walked by the hybrid engine only, not yet by mujoco"),
     ("biped-gait-simulator", ["--ros-args", "-p", "cmd_vel_timeout:=-1.0"], "parameter cmd_vel_timeout: must be in"),
     ("biped-gait-launch", ["--config", "binary.yaml"], "binary.yaml: not UTF-8 text"),
     ("biped-gait-launch", ["--config", "nested.yaml"], "nested more than 32 levels"),

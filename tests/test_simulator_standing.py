@@ -2,7 +2,8 @@
 own: the robot stands at rest (the pelvis still on /odom, /gait_phase STANDING), a /cmd_vel to
 walk is refused once with the core's physical reason and the robot stands on, a push within the
 measured limit through ~/push is recovered, and the recording, read back by rosbags, holds what
-was published; a push well above the limit is a fall with its reason."""
+was published; a push well above the limit is a fall with its reason. MuJoCo (``engine:=mujoco``)
+stands on its contacts likewise."""
 
 from __future__ import annotations
 
@@ -117,10 +118,30 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
     assert len(recorded["/odom"]) >= 100 * DURATION * 0.99
 
 
-def test_a_push_well_above_the_limit_is_a_fall_with_its_reason(planner_node, tmp_path):
-    """5 N s forward, scripted half a period into the standing: a FALL event with its reason (a
-    foot lifts or slips), the log line, exit status 1."""
-    proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "stand_duration:=2.0",
+def test_mujoco_stands_on_its_contacts_and_recovers_a_push(planner_node, tmp_path):
+    """``engine:=mujoco``: both feet on MuJoCo's floor, held by its contacts with friction; at rest
+    before a scripted push of 0.5 N s (forward, at 0.225 s), at rest again by the end (4 s)."""
+    proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "engine:=mujoco", "stand_duration:=4.0",
+                           "real_time_factor:=0.0", "publish_rate:=100.0", "exit_when_done:=true",
+                           f"pushes:=0 0.5 {PUSH} 0 0")
+    assert proc.wait(timeout=120) == 0, (tmp_path / "biped-gait-simulator.log").read_text()
+    [bag] = list((tmp_path / "bags").iterdir())
+    recorded = read_bag(bag)
+    assert [m.kind for _, m in recorded["/gait_events"]] == [GaitEvent.PUSH, GaitEvent.FINISHED]
+    assert [m.phase for _, m in recorded["/gait_phase"]] == [GaitPhase.STANDING]
+    odom = [m for _, m in recorded["/odom"]]
+    before = [m for m in odom if _seconds(m.header) - _seconds(odom[0].header) < 0.2]
+    assert before and max(_speed(m) for m in before) < AT_REST
+    assert max(_speed(m) for m in odom) > 10 * AT_REST  # it did push
+    assert _speed(odom[-1]) < AT_REST
+
+
+@pytest.mark.parametrize("engine, reasons", [("hybrid", ("slips", "not positive")), ("mujoco", ("slid", "lifted"))])
+def test_a_push_well_above_the_limit_is_a_fall_with_its_reason(planner_node, tmp_path, engine, reasons):
+    """5 N s forward, scripted half a period into the standing: a FALL event with its reason (the
+    planner's model: a foot's reaction leaves the cone; MuJoCo: a foot slides or lifts), the log
+    line, exit status 1."""
+    proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", f"engine:={engine}", "stand_duration:=2.0",
                            "real_time_factor:=0.0", "publish_rate:=100.0", "exit_when_done:=true",
                            "pushes:=0 0.5 5.0 0 0")
     assert proc.wait(timeout=120) == 1
@@ -129,6 +150,6 @@ def test_a_push_well_above_the_limit_is_a_fall_with_its_reason(planner_node, tmp
     [bag] = list((tmp_path / "bags").iterdir())
     events = [m for _, m in read_bag(bag)["/gait_events"]]
     assert [e.kind for e in events] == [GaitEvent.PUSH, GaitEvent.FALL]
-    print(f"\npush of 5 N s standing: {events[-1].message}")
-    assert "slips" in events[-1].message or "not positive" in events[-1].message
+    print(f"\npush of 5 N s standing ({engine}): {events[-1].message}")
+    assert any(reason in events[-1].message for reason in reasons)
     assert events[0].time_in_step == pytest.approx(0.5 * 0.45, abs=1e-9)

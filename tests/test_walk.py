@@ -169,25 +169,26 @@ def test_a_walk_by_steps_gives_what_it_gives_sample_by_sample(default_gait):
     assert steps[1].samples[0].stance_side == "left" and steps[1].world.stance_foot[0] == pytest.approx(0.45)
 
 
-def test_a_walk_that_stands_stands_its_duration_in_world_terms(default_gait):
+@pytest.mark.parametrize("engine, at_rest", [("hybrid", 1e-9), ("mujoco", 1e-3)])
+def test_a_walk_that_stands_stands_its_duration_in_world_terms(default_gait, engine, at_rest):
     """``Walk(initial_state='standing')``: the standing phase for ``stand_duration`` s (to the next
     chunk), both feet down, the pelvis at rest above the feet, ``before_step`` before each chunk;
-    then ``Finished`` with no step made. MuJoCo does not stand yet: refused with its reason."""
+    then ``Finished`` with no step made. In both engines: the planner's model holds the feet (the
+    pelvis at rest to rounding), MuJoCo's contacts let the tips settle by about 1e-5 m (the
+    issue's 1e-3 m/s)."""
     calls = []
     walk = Walk(PlannedOrbit.of(default_gait), 100.0, 3, initial_state="standing", stand_duration=0.45,
-                before_step=lambda walker: calls.append(walker.state.t_step))
+                engine=engine, before_step=lambda walker: calls.append(walker.state.t_step))
     items = list(walk)
     samples = [item for item in items if isinstance(item, Sample)]
     assert type(items[-1]).__name__ == "Finished" and items[-1].steps == 0
     assert items[-1].t == pytest.approx(0.5, abs=1e-9) and samples[-1].t == pytest.approx(0.5, abs=1e-9)
     assert all(s.phase == "standing" and s.feet_on_ground == ("right", "left") for s in samples)
     speeds = [np.linalg.norm(s.world.pelvis_linear_velocity) for s in samples]
-    assert max(speeds) < 1e-9
+    assert max(speeds) < at_rest
     pelvis = samples[-1].world.pelvis_position
     feet = [foot.position for foot in samples[-1].feet]
     assert 0.0 < pelvis[0] - feet[0][0] < feet[1][0] - feet[0][0] and pelvis[2] > 0.5  # above, between the feet
     assert calls == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4], abs=1e-9)
-    with pytest.raises(ValueError, match="hybrid engine only"):
-        Walk(PlannedOrbit.of(default_gait), 100.0, initial_state="standing", engine="mujoco")
     with pytest.raises(ValueError, match="unknown initial state 'sitting'"):
         Walk(PlannedOrbit.of(default_gait), 100.0, initial_state="sitting")

@@ -25,8 +25,8 @@ arrays and their messages are serialized at once (``walk_messages``). Controls: 
 and log time is on one clock, the simulated time (``SimClock.now_ns``).
 
 Standing, starting and stopping: with ``initial_state`` ``standing`` the robot stands at rest,
-both feet down, held by the core's balance controller (``core/walking/phases/standing.py``, the
-hybrid engine only), for ``stand_duration`` s (0: until stopped), publishing and recording as a
+both feet down, held by the core's balance controller (``core/walking/phases/standing.py``; in
+MuJoCo by its own contacts with friction), for ``stand_duration`` s (0: until stopped), publishing and recording as a
 walk does (``/gait_phase`` ``STANDING``, ``/odom`` at rest); pushes act on it with both feet held.
 A ``/cmd_vel`` that is not 0 asks it to start onto the plan's gait, and ``/cmd_vel`` linear.x 0
 asks a walk to stop: the core refuses both for the shipped parameter sets with the physical
@@ -161,8 +161,8 @@ PARAMETERS = (
     Param("momentum_rate", DEFAULT_RATE, "with recovery 'momentum': the momentum error's contraction per step "
           "(0: dead-beat)", 0.0, 0.99),
     Param("initial_state", INITIAL_STATES[0], "how the walk begins: 'walking' (on the gait's orbit, at the start of "
-          "a step) or 'standing' (at rest, both feet down, held by the balance controller for stand_duration; "
-          "engine 'hybrid' only). A standing robot cannot start yet: /cmd_vel is refused with the physical reason "
+          "a step) or 'standing' (at rest, both feet down, held by the balance controller for stand_duration, "
+          "in either engine). A standing robot cannot start yet: /cmd_vel is refused with the physical reason "
           "(docs/model.md section 8.10)", choices=INITIAL_STATES),
     Param("stand_duration", 0.0, "with initial_state 'standing': how long the robot stands (s of simulated time, "
           "to the next 0.1 s); 0: until stopped. steps counts the steps of a walk", 0.0, 1e6),

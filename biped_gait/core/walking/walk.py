@@ -49,8 +49,6 @@ def check_initial_state(initial_state: str, engine: str) -> None:
         raise ValueError(f"unknown initial state {initial_state!r}: use one of {', '.join(INITIAL_STATES)}")
     if engine not in ENGINES:
         raise ValueError(f"unknown engine {engine!r}: use one of {', '.join(ENGINES)}")
-    if initial_state == "standing" and engine != "hybrid":
-        raise ValueError(f"standing is walked by the hybrid engine only, not yet by {engine}: use engine hybrid")
 
 
 class Walk:
