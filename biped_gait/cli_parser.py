@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .arguments import MANY, ONE, RANGE, OneLineParser, add_gait_options, add_json, add_point
+from .arguments import MANY, RANGE, OneLineParser, add_gait_options, add_json, add_point
 from .core.model.params import DEFAULT_PARAMS, shipped_param_names
 from .gait_options import MODES
 

@@ -35,7 +35,7 @@ from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
 from biped_gait.ros.client import ClientSide, plan_request
-from biped_gait_interfaces.msg import AngularMomentum, GaitEvent
+from biped_gait_interfaces.msg import AngularMomentum
 from biped_gait_interfaces.srv import PlanGait
 
 from .ros_helpers import read_bag, start_node, start_simulator, stop_node

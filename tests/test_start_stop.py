@@ -5,7 +5,6 @@ the default gait both the stop and the start are refused with their physical rea
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import replace
 
