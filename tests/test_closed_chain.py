@@ -98,3 +98,24 @@ def test_at_the_papers_touchdown_a_held_impact_would_pull_the_old_stance_foot(pl
     impact = chain.impact(default_gait.step.q_target, default_gait.step.qd_b)
     assert impact.old[2] == pytest.approx(-57.84, abs=0.01)
     assert impact.new[2] > 0
+
+
+@pytest.mark.parametrize("which", ["aoustin2013", "aoustin2013-hips"])
+def test_every_gait_of_the_family_would_pull_its_old_stance_foot_held(which, planner, hips):
+    """The evidence behind docs/model.md section 12.1 (i): over the gaits' range (L 0.3 to 0.6 m,
+    T 0.4 to 0.6 s, both modes, alpha 20 deg), the passive impact with both feet held needs the
+    ground to pull the old stance foot down by 38 to 68 N s: a double support that lasts cannot begin
+    with a passive touchdown of these gaits. Measured: -49.2 to -67.5 N s (aoustin2013), -38.6 to
+    -46.9 N s (aoustin2013-hips); far from 0, so a bound of -30 N s holds on any machine."""
+    chosen = planner if which == "aoustin2013" else hips
+    chain = ClosedChain(chosen.model, chosen.hybrid.exchange)
+    pulls = []
+    for length in (0.3, 0.4, 0.5, 0.6):
+        for period in (0.4, 0.5, 0.6):
+            for mode in ("normal", "anti-normal"):
+                gait = chosen.plan(GaitRequest(length, period, math.radians(20.0), mode))
+                impact = chain.impact(gait.step.q_target, gait.step.qd_b)
+                assert impact.new[2] > 0
+                pulls.append(impact.old[2])
+    print(f"\n{which}: the old stance foot's vertical impulse, held, from {min(pulls):.1f} to {max(pulls):.1f} N s")
+    assert len(pulls) == 24 and max(pulls) < -30.0
