@@ -212,6 +212,11 @@ TOLERANCES: dict[str, Any] = {
                                       "measured up to 2e-12 (N s, N m s)"),
     "lp_duality_gap": Below(1e-9, "the LP's optimality certificate (N m s)"),
     "energy_drift": Below(1e-10, "the fixed RK8 grid's energy error over the step (J; 1e-14 measured)"),
+    **{key: Below(bound, "the plan's estimate of its integration error: within the contract (docs/model.md 4.11)")
+       for key, bound in (("integration_error_end_point", 1e-9), ("integration_error_W", 1e-8),
+                          ("integration_error_figures", 1e-8))},
+    "integration_error_samples": Below(1e-6, "the estimated error of the Hermite samples (1e-8 measured at 32 steps)"),
+    "grid_steps": Count(0, "the RK8 grid the plan was solved on: the planner's own, not refined"),
     "bvp_iterations": Count(1, "Newton's iterations: the residual crosses the tolerance one iteration earlier or later"),
     "dynamics_evaluations": Count(_coarse_iteration(), "one coarse-grid iteration more or less"),
     "multipliers": Spectrum(MULTIPLIER, "the Jacobian's precision (MULTIPLIER)"),

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .accuracy import IntegrationError
 from .admissibility import Verdict, failure_message
 from .bvp import BvpSolution
 from .configurations import GaitMode
@@ -101,7 +102,7 @@ class Gait:
     ``continuation``: by continuation from the nearest admissible gait, ``cold``: from the
     straight-line start); and, when it is not admissible, a ``hint`` of where admissible gaits are;
     the open-loop Floquet multipliers of its Poincare map (``stability``, when the double support
-    was solved)."""
+    was solved); the estimate of its integration error (``accuracy``, when the BVP converged)."""
 
     problem: GaitProblem
     names: CoordinateNames
@@ -113,6 +114,7 @@ class Gait:
     found: str = "cold"
     hint: str = ""
     stability: Multipliers | None = None
+    accuracy: IntegrationError | None = None
 
     # The request's figures, as every user of a gait reads them.
     step_length = property(lambda self: self.problem.step_length, doc="L (m)")

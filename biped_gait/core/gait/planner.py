@@ -27,16 +27,19 @@ from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
 from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
-from ..dynamics.flow import BallisticFlow, FlowResult, hermite_samples
+from ..dynamics.flow import FlowResult, hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem, Stride
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, friction_ratios, solve_impulses
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params, names_set
 from .figures import StepFigures, energy_drift, step_figures
+from .grid import Grid
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
-from .monodromy import BackgroundVariationalFlow, SpeculativeFlow
+from .monodromy import SpeculativeFlow
+from .accuracy import IntegrationError
+from . import richardson
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
@@ -48,6 +51,7 @@ CLOSURE_ROUNDS = 10  # re-solves of the closure matched to the spin moments' sha
 CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride's continuation
 MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
 RADIUS_BISECTIONS = 4  # halvings of the curvature interval where a stride stops being admissible
+REFINEMENTS = 4  # doublings of a plan's grid allowed to meet the accuracy contract (32 steps to 512)
 StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, qd_B(0), theta_2)
 
 
@@ -202,9 +206,9 @@ class GaitPlanner:
         self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
         self.hybrid = HybridStep(self.model)
-        self.flow = self.hybrid.flow(settings.fine_steps)
-        self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
-        self._background = BackgroundVariationalFlow(BallisticFlow(self.model.single, settings.fine_steps))
+        self.grid = Grid.of(self.hybrid, settings.fine_steps, settings.coarse_steps)
+        self.flow, self.coarse_flow = self.grid.flow, self.grid.coarse
+        self._refined: dict[int, Grid] = {}  # the finer grids plans were refined to, by steps
         for mode in GaitMode if modes is None else map(GaitMode.parse, modes):
             self._atlases[mode] = self._load_atlas(mode)
 
@@ -467,10 +471,27 @@ class GaitPlanner:
         return replace(gait, hint=atlas.hint(point))
 
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
-        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start)."""
-        shooting = SpeculativeFlow(self.flow, self._background)
+        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start) on the
+        planner's grid, and again on grids of twice as many steps (``REFINEMENTS`` at most, each
+        from the last solution) while its estimated integration error exceeds the contract."""
+        grid = self.grid
+        gait = self._solve_on(grid, problem, guess, found)
+        for _ in range(REFINEMENTS):
+            if gait.accuracy is None or gait.accuracy.within_contract:
+                break
+            steps = 2 * grid.steps
+            if steps not in self._refined:
+                self._refined[steps] = Grid.of(self.hybrid, steps, grid.steps)
+            grid = self._refined[steps]
+            gait = self._solve_on(grid, problem, gait.warm_start(), found)
+        return gait
+
+    def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
+                  found: str) -> Gait:
+        """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error."""
+        shooting = SpeculativeFlow(grid.flow, grid.background)
         step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                         problem.mode, problem.closure, guess, self.settings, self.coarse_flow, problem.step_width)
+                         problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width)
         flow = self._variational_flow(problem, step, shooting)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
@@ -479,23 +500,35 @@ class GaitPlanner:
                     abs(ds.foot_line_moment) <= self.settings.tolerance or \
                     abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
                 break  # nothing to match: the spin moments change nothing (or the closure already matches)
-            shooting = SpeculativeFlow(self.flow, self._background)
+            shooting = SpeculativeFlow(grid.flow, grid.background)
             step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
+                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, grid.coarse,
                              problem.step_width, closure_target=-ds.foot_line_moment)
             flow = self._variational_flow(problem, step, shooting)
             gait = self.step_gait(problem, step, found)
         else:
             gait = self._unsettled(problem, step, found)
+        if gait.converged:
+            gait = replace(gait, accuracy=self._integration_error(grid, problem, gait))
         if gait.double_support is not None and gait.double_support.impulses.success:
-            gait = replace(gait, stability=self._multipliers(problem, step, gait.double_support.impulses, flow))
+            gait = replace(gait, stability=self._multipliers(grid, problem, step, gait.double_support.impulses, flow))
         return gait
 
-    def _multipliers(self, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
+    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait) -> IntegrationError:
+        """The integration error of ``gait``, solved on ``grid``: its step solved again on the
+        estimate's grid from its own solution, with the same closure (``richardson``)."""
+        step = gait.step
+        coarse = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
+                           problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, None,
+                           problem.step_width, closure_target=step.closure_gap)
+        end = grid.estimate.propagate(step.q0, step.qd_a, problem.period).q
+        return richardson.estimate(gait, self.step_gait(problem, coarse, gait.found), end, grid.ratio)
+
+    def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
         """The open-loop multipliers of the solved ``step`` with its ``impulses``, from ``flow``,
-        the step's variational flow begun on the background thread (waited for here)."""
-        return open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a, impulses.i_minus,
+        the step's variational flow on ``grid`` begun on the background thread (waited for here)."""
+        return open_loop(self.hybrid, grid.flow, problem.period, step.q0, step.qd_a, impulses.i_minus,
                          impulses.i_plus, flow.result())
 
     def _variational_flow(self, problem: GaitProblem, step: BvpSolution,
