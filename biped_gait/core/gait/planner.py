@@ -473,7 +473,8 @@ class GaitPlanner:
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
         """The gait of ``problem`` solved from ``guess`` (None: the straight-line start) on the
         planner's grid, and again on grids of twice as many steps (``REFINEMENTS`` at most, each
-        from the last solution) while its estimated integration error exceeds the contract."""
+        from the last solution) while its estimated integration error exceeds the contract (a
+        refined solve that fails leaves the last gait, its estimate saying it misses it)."""
         grid = self.grid
         gait = self._solve_on(grid, problem, guess, found)
         for _ in range(REFINEMENTS):
@@ -483,7 +484,10 @@ class GaitPlanner:
             if steps not in self._refined:
                 self._refined[steps] = Grid.of(self.hybrid, steps, grid.steps)
             grid = self._refined[steps]
-            gait = self._solve_on(grid, problem, gait.warm_start(), found)
+            refined = self._solve_on(grid, problem, gait.warm_start(), found)
+            if not refined.converged:
+                break
+            gait = refined
         return gait
 
     def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
