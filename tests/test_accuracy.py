@@ -37,6 +37,9 @@ ROUNDING = 1e-12  # what rounding leaves of a figure (relative) or of an end poi
 # them to about 1e-8 of it on any grid (the 13-DOF gait's on 256 and 512 steps differ by 8.6e-9 of it), so the
 # contract holds for them at that precision, twice 1e-8; the spectral radius itself converges to 1e-9.
 MULTIPLIERS = 2 * FIGURE_BOUND
+# A stride's spectral radius: of the product of its two steps' Jacobians, known to about 2e-8 of itself on any
+# grid (its strides on 128 and 256 steps differ by 2.3e-8).
+STRIDE_RADIUS = 5 * FIGURE_BOUND
 
 
 def _grid(steps: int) -> object:
@@ -147,6 +150,23 @@ def test_without_refinement_the_coarse_plan_says_it_misses_the_contract(solved, 
     true_end = _end_point(coarse, fine)
     assert true_end > END_POINT_BOUND and coarse.accuracy.end_point >= true_end
     assert not coarse.accuracy.within_contract and coarse.accuracy.steps == 8
+
+
+def test_a_stride_meets_the_contract_step_by_step(planners):
+    """A stride on a circle of 2 m (``aoustin2013-hips``): each step's figures and end point within
+    the contract of the stride's on 256 steps, each estimate bounding its step's true error; the
+    stride's spectral radius within ``STRIDE_RADIUS``."""
+    planner, references = planners["aoustin2013-hips"]
+    request = GaitRequest(0.45, 0.45, math.radians(20.0), "normal", turn_radius=2.0)
+    stride = planner.plan_stride(request)
+    reference = references[REFERENCE_STEPS].plan_stride(request, stride.warm_start())
+    assert stride.converged and reference.converged and stride.meets_contract
+    fine = references[REFERENCE_STEPS].flow
+    for step, converged in zip(stride.steps, reference.steps):
+        errors = _true_errors(step, converged)
+        assert max(errors.values()) <= min(FIGURE_BOUND, step.accuracy.figures + ROUNDING), errors
+        assert _end_point(step, fine) <= min(END_POINT_BOUND, step.accuracy.end_point + ROUNDING)
+    assert relative_error(stride.stability.spectral_radius, reference.stability.spectral_radius) <= STRIDE_RADIUS
 
 
 def test_relative_error_reads_figures_as_the_contract_does():

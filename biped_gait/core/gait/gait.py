@@ -145,6 +145,11 @@ class Gait:
         """Converged, admissible, with a finite effort: a gait whose W counts in a study."""
         return self.converged and self.admissible and math.isfinite(self.W)
 
+    @property
+    def meets_contract(self) -> bool:
+        """Solved, and its estimated integration error within the accuracy contract."""
+        return self.accuracy is not None and self.accuracy.within_contract
+
     def warm_start(self) -> tuple[np.ndarray, float] | None:
         """The guess (qd(0), theta) a neighbouring solve can start from; None after a failure."""
         return (self.step.qd_a.copy(), self.step.theta) if self.converged else None
@@ -175,6 +180,14 @@ class Stride:
     problem = property(lambda self: self.steps[0].problem, doc="the request (step A's)")
     converged = property(lambda self: all(s.converged for s in self.steps))
     admissible = property(lambda self: all(s.admissible for s in self.steps))
+    meets_contract = property(lambda self: all(s.meets_contract for s in self.steps),
+                              doc="both steps solved within the accuracy contract")
+
+    def warm_start(self) -> tuple[np.ndarray, float, np.ndarray, float] | None:
+        """The guess (qd_A(0), theta_1, qd_B(0), theta_2) a neighbouring solve can start from;
+        None after a failure."""
+        a, b = self.steps
+        return (a.qd_a.copy(), a.theta, b.qd_a.copy(), b.theta) if self.converged else None
 
     @property
     def reasons(self) -> tuple[str, ...]:

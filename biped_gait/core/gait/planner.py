@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Callable, Iterable
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,7 +27,7 @@ from .atlas import Atlas, AtlasError, atlas_path
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
 from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
-from ..dynamics.flow import FlowResult, hermite_samples
+from ..dynamics.flow import BallisticFlow, FlowResult, hermite_samples
 from .gait import DoubleSupport, Gait, GaitProblem, Stride
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, friction_ratios, solve_impulses
@@ -38,7 +38,6 @@ from .grid import Grid
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import SpeculativeFlow
-from .accuracy import IntegrationError
 from . import richardson
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
@@ -330,16 +329,25 @@ class GaitPlanner:
         return self._turning_atlases[mode]
 
     def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
-        """The stride of ``problem`` solved from ``guess`` on the fine grid, its closures matched
-        to what the spin moments do (legs leaning), with its multipliers if ``stability``."""
+        """The stride of ``problem`` solved from ``guess``, on a grid that meets the accuracy
+        contract (``_refining``), with its multipliers if ``stability``."""
+        return self._refining(lambda grid, start: self._stride_on(grid, problem, start, found, stability), guess)
+
+    def _stride_on(self, grid: Grid, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
+                   estimate: bool = True) -> Stride:
+        """The stride of ``problem`` solved from ``guess`` on ``grid``, its closures matched
+        to what the spin moments do (legs leaning), with its steps' integration errors if
+        ``estimate`` and its multipliers if ``stability``."""
         from .stride import solve_stride  # strides only: a straight plan does without
+
+        def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float]):
+            return solve_stride(self.hybrid, on, problem.step_length, problem.period, problem.arm_amplitude,
+                                problem.mode, problem.turn_radius, start, self.settings, coarse, targets)
 
         targets = np.zeros(2)
         closure = _ClosureRounds()
         for _ in range(CLOSURE_ROUNDS):
-            solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
-                                    problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow,
-                                    tuple(targets))
+            solution = solve(grid.flow, grid.coarse, guess, tuple(targets))
             a, b = solution.steps
             steps = (self.step_gait(problem, a, found, b.qd_a), self.step_gait(problem, b, found, a.qd_a))
             if not all(g.double_support is not None and g.double_support.impulses.success for g in steps):
@@ -351,9 +359,12 @@ class GaitPlanner:
             guess = (a.qd_a, a.theta, b.qd_a, b.theta)
         else:  # the rounds ran out: no consistent double supports (the LPs flip between vertices)
             steps = (self._unsettled(problem, a, found, b.qd_a), self._unsettled(problem, b, found, a.qd_a))
+        if estimate and all(g.converged for g in steps):
+            again = solve(grid.estimate, None, (a.qd_a, a.theta, b.qd_a, b.theta), (a.closure_gap, b.closure_gap))
+            steps = self._estimated(grid, problem, steps, again.steps)
         multipliers = None
         if stability and all(g.double_support is not None and g.double_support.impulses.success for g in steps):
-            maps = [PoincareMap(self.hybrid, self.flow, problem.period, g.double_support.impulses.i_minus,
+            maps = [PoincareMap(self.hybrid, grid.flow, problem.period, g.double_support.impulses.i_minus,
                                 g.double_support.impulses.i_plus) for g in steps]
             jacobians = [m.jacobian(np.concatenate([g.step.q0, g.step.qd_a])) for m, g in zip(maps, steps)]
             multipliers = multipliers_of(jacobians[1] @ jacobians[0])
@@ -362,12 +373,14 @@ class GaitPlanner:
     def _radius_hint(self, problem: GaitProblem, path: list[tuple[float, StrideGuess]]) -> str:
         """The smallest radius (m) of an admissible stride along the continuation ``path`` (its
         curvatures, 1/m, and strides, from the straight gait towards the request's), by bisection
-        (``RADIUS_BISECTIONS`` halvings of the last interval), in words."""
+        (``RADIUS_BISECTIONS`` halvings of the last interval), in words. The strides it tries are
+        probes on the planner's grid, read for their admissibility only: no estimate, no refinement."""
         where = (f"L = {problem.step_length:g} m, T = {problem.period:g} s, "
                  f"alpha = {math.degrees(problem.arm_amplitude):g} deg")
 
         def admissible(curvature: float, guess: StrideGuess) -> Stride | None:
-            stride = self._stride(replace(problem, turn_radius=1.0 / curvature), guess, "continuation", stability=False)
+            stride = self._stride_on(self.grid, replace(problem, turn_radius=1.0 / curvature), guess, "continuation",
+                                     stability=False, estimate=False)
             return stride if stride.admissible else None
 
         low, high = 0, len(path)  # path[:low] admissible (the straight gait is), path[high:] not
@@ -471,24 +484,29 @@ class GaitPlanner:
         return replace(gait, hint=atlas.hint(point))
 
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
-        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start) on the
-        planner's grid, and again on grids of twice as many steps (``REFINEMENTS`` at most, each
-        from the last solution) while its estimated integration error exceeds the contract (a
-        refined solve that fails leaves the last gait, its estimate saying it misses it)."""
+        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start), on a grid
+        that meets the accuracy contract (``_refining``)."""
+        return self._refining(lambda grid, start: self._solve_on(grid, problem, start, found), guess)
+
+    def _refining(self, solve: Callable[[Grid, Any], Gait | Stride], guess: Any) -> Gait | Stride:
+        """``solve(grid, guess)`` on the planner's grid, and again on grids of twice as many steps
+        (``REFINEMENTS`` at most, each from the last solution) while it converges but its estimated
+        integration error exceeds the contract (a refined solve that fails leaves the last one,
+        its estimate saying it misses it)."""
         grid = self.grid
-        gait = self._solve_on(grid, problem, guess, found)
+        result = solve(grid, guess)
         for _ in range(REFINEMENTS):
-            if gait.accuracy is None or gait.accuracy.within_contract:
+            if not result.converged or result.meets_contract:
                 break
             steps = 2 * grid.steps
             if steps not in self._refined:
                 self._refined[steps] = Grid.of(self.hybrid, steps, grid.steps)
             grid = self._refined[steps]
-            refined = self._solve_on(grid, problem, gait.warm_start(), found)
+            refined = solve(grid, result.warm_start())
             if not refined.converged:
                 break
-            gait = refined
-        return gait
+            result = refined
+        return result
 
     def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
                   found: str) -> Gait:
@@ -513,20 +531,31 @@ class GaitPlanner:
         else:
             gait = self._unsettled(problem, step, found)
         if gait.converged:
-            gait = replace(gait, accuracy=self._integration_error(grid, problem, gait))
+            gait = self._integration_error(grid, problem, gait)
         if gait.double_support is not None and gait.double_support.impulses.success:
             gait = replace(gait, stability=self._multipliers(grid, problem, step, gait.double_support.impulses, flow))
         return gait
 
-    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait) -> IntegrationError:
-        """The integration error of ``gait``, solved on ``grid``: its step solved again on the
-        estimate's grid from its own solution, with the same closure (``richardson``)."""
+    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait) -> Gait:
+        """``gait``, solved on ``grid``, with its integration error: its step solved again on the
+        estimate's grid from its own solution, with the same closure (``_estimated``)."""
         step = gait.step
         coarse = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
                            problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, None,
                            problem.step_width, closure_target=step.closure_gap)
-        end = grid.estimate.propagate(step.q0, step.qd_a, problem.period).q
-        return richardson.estimate(gait, self.step_gait(problem, coarse, gait.found), end, grid.ratio)
+        return self._estimated(grid, problem, (gait,), (coarse,))[0]
+
+    def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...],
+                   coarse: tuple[BvpSolution, ...]) -> tuple[Gait, ...]:
+        """The steps of a plan (``plans``, on ``grid``, each followed by the next and the last by
+        the first) with their integration errors, from ``coarse``, the same steps solved on the
+        estimate's grid (``richardson``)."""
+        out = []
+        for plan, step, following in zip(plans, coarse, coarse[1:] + coarse[:1]):
+            end = grid.estimate.propagate(plan.step.q0, plan.step.qd_a, problem.period).q
+            again = self.step_gait(problem, step, plan.found, following.qd_a)
+            out.append(replace(plan, accuracy=richardson.estimate(plan, again, end, grid.ratio)))
+        return tuple(out)
 
     def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
