@@ -331,13 +331,15 @@ class GaitPlanner:
     def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess``, on a grid that meets the accuracy
         contract (``_refining``), with its multipliers if ``stability``."""
-        return self._refining(lambda grid, start: self._stride_on(grid, problem, start, found, stability), guess)
+        return self._refining(lambda grid, start, coarser: self._stride_on(grid, problem, start, found, stability,
+                                                                          coarser), guess)
 
     def _stride_on(self, grid: Grid, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
-                   estimate: bool = True) -> Stride:
+                   coarser: Stride | None = None, estimate: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess`` on ``grid``, its closures matched
         to what the spin moments do (legs leaning), with its steps' integration errors if
-        ``estimate`` and its multipliers if ``stability``."""
+        ``estimate`` (against ``coarser``, the stride on the estimate's grid, if solved already;
+        else solved again there from this one) and its multipliers if ``stability``."""
         from .stride import solve_stride  # strides only: a straight plan does without
 
         def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float]):
@@ -360,8 +362,12 @@ class GaitPlanner:
         else:  # the rounds ran out: no consistent double supports (the LPs flip between vertices)
             steps = (self._unsettled(problem, a, found, b.qd_a), self._unsettled(problem, b, found, a.qd_a))
         if estimate and all(g.converged for g in steps):
-            again = solve(grid.estimate, None, (a.qd_a, a.theta, b.qd_a, b.theta), (a.closure_gap, b.closure_gap))
-            steps = self._estimated(grid, problem, steps, again.steps)
+            if coarser is None:
+                again = solve(grid.estimate, None, (a.qd_a, a.theta, b.qd_a, b.theta), (a.closure_gap, b.closure_gap))
+                ca, cb = again.steps
+                coarser = Stride(problem.turn_radius, (self.step_gait(problem, ca, found, cb.qd_a),
+                                                       self.step_gait(problem, cb, found, ca.qd_a)), None, math.nan, found)
+            steps = self._estimated(grid, problem, steps, coarser.steps)
         multipliers = None
         if stability and all(g.double_support is not None and g.double_support.impulses.success for g in steps):
             maps = [PoincareMap(self.hybrid, grid.flow, problem.period, g.double_support.impulses.i_minus,
@@ -380,7 +386,7 @@ class GaitPlanner:
 
         def admissible(curvature: float, guess: StrideGuess) -> Stride | None:
             stride = self._stride_on(self.grid, replace(problem, turn_radius=1.0 / curvature), guess, "continuation",
-                                     stability=False, estimate=False)
+                                     False, estimate=False)
             return stride if stride.admissible else None
 
         low, high = 0, len(path)  # path[:low] admissible (the straight gait is), path[high:] not
@@ -486,15 +492,16 @@ class GaitPlanner:
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
         """The gait of ``problem`` solved from ``guess`` (None: the straight-line start), on a grid
         that meets the accuracy contract (``_refining``)."""
-        return self._refining(lambda grid, start: self._solve_on(grid, problem, start, found), guess)
+        return self._refining(lambda grid, start, coarser: self._solve_on(grid, problem, start, found, coarser), guess)
 
-    def _refining(self, solve: Callable[[Grid, Any], Gait | Stride], guess: Any) -> Gait | Stride:
-        """``solve(grid, guess)`` on the planner's grid, and again on grids of twice as many steps
-        (``REFINEMENTS`` at most, each from the last solution) while it converges but its estimated
-        integration error exceeds the contract (a refined solve that fails leaves the last one,
-        its estimate saying it misses it)."""
+    def _refining(self, solve: Callable[[Grid, Any, Any], Gait | Stride], guess: Any) -> Gait | Stride:
+        """``solve(grid, guess, None)`` on the planner's grid, and again on grids of twice as many
+        steps (``REFINEMENTS`` at most, each from the last solution, which is also what its
+        estimate compares with) while it converges but its estimated integration error exceeds
+        the contract (a refined solve that fails leaves the last one, its estimate saying it
+        misses it)."""
         grid = self.grid
-        result = solve(grid, guess)
+        result = solve(grid, guess, None)
         for _ in range(REFINEMENTS):
             if not result.converged or result.meets_contract:
                 break
@@ -502,15 +509,16 @@ class GaitPlanner:
             if steps not in self._refined:
                 self._refined[steps] = Grid.of(self.hybrid, steps, grid.steps)
             grid = self._refined[steps]
-            refined = solve(grid, result.warm_start())
+            refined = solve(grid, result.warm_start(), result)
             if not refined.converged:
                 break
             result = refined
         return result
 
     def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
-                  found: str) -> Gait:
-        """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error."""
+                  found: str, coarser: Gait | None = None) -> Gait:
+        """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error
+        (against ``coarser``, the gait on the estimate's grid, if solved already)."""
         shooting = SpeculativeFlow(grid.flow, grid.background)
         step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
                          problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width)
@@ -531,31 +539,30 @@ class GaitPlanner:
         else:
             gait = self._unsettled(problem, step, found)
         if gait.converged:
-            gait = self._integration_error(grid, problem, gait)
+            gait = self._integration_error(grid, problem, gait, coarser)
         if gait.double_support is not None and gait.double_support.impulses.success:
             gait = replace(gait, stability=self._multipliers(grid, problem, step, gait.double_support.impulses, flow))
         return gait
 
-    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait) -> Gait:
-        """``gait``, solved on ``grid``, with its integration error: its step solved again on the
-        estimate's grid from its own solution, with the same closure (``_estimated``)."""
-        step = gait.step
-        coarse = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
-                           problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, None,
-                           problem.step_width, closure_target=step.closure_gap)
-        return self._estimated(grid, problem, (gait,), (coarse,))[0]
+    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
+        """``gait``, solved on ``grid``, with its integration error: against ``coarser``, the gait
+        on the estimate's grid, or (None) its step solved again there from its own solution,
+        with the same closure (``_estimated``)."""
+        if coarser is None:
+            step = gait.step
+            coarser = self.step_gait(problem, solve_bvp(
+                self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
+                problem.closure, (step.qd_a, step.theta), self.settings, None, problem.step_width,
+                closure_target=step.closure_gap), gait.found)
+        return self._estimated(grid, problem, (gait,), (coarser,))[0]
 
     def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...],
-                   coarse: tuple[BvpSolution, ...]) -> tuple[Gait, ...]:
-        """The steps of a plan (``plans``, on ``grid``, each followed by the next and the last by
-        the first) with their integration errors, from ``coarse``, the same steps solved on the
-        estimate's grid (``richardson``)."""
-        out = []
-        for plan, step, following in zip(plans, coarse, coarse[1:] + coarse[:1]):
-            end = grid.estimate.propagate(plan.step.q0, plan.step.qd_a, problem.period).q
-            again = self.step_gait(problem, step, plan.found, following.qd_a)
-            out.append(replace(plan, accuracy=richardson.estimate(plan, again, end, grid.ratio)))
-        return tuple(out)
+                   coarse: tuple[Gait, ...]) -> tuple[Gait, ...]:
+        """The steps of a plan (``plans``, on ``grid``) with their integration errors, from
+        ``coarse``, the same steps on the estimate's grid (``richardson``)."""
+        return tuple(replace(plan, accuracy=richardson.estimate(
+            plan, again, grid.estimate.propagate(plan.step.q0, plan.step.qd_a, problem.period).q, grid.ratio))
+            for plan, again in zip(plans, coarse))
 
     def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
