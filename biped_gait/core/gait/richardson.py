@@ -3,7 +3,7 @@ extrapolation over the two grids it has (docs/model.md section 4.11).
 
 The plan is solved on its grid of N RK8 steps per T; the same step is solved again on the coarse
 grid of N / r steps (Newton's, r = 2), from the plan's own solution (one Newton iteration), with
-its double support and figures. A figure whose error is C h^p on a grid of step h errs by r^p
+its double support and figures (a plan refined from one on that grid is compared with it). A figure whose error is C h^p on a grid of step h errs by r^p
 times more on the coarse grid, so the plan's own error is about (coarse - plan) / (r^p - 1):
 p = 8 for the RK8 grid's end state and what the BVP's solution and the double support make of it,
 p = 5 for what is read from the quintic Hermite samples between the nodes (``accuracy.FIGURES``).
