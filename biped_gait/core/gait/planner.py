@@ -39,6 +39,7 @@ from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import SpeculativeFlow
 from . import richardson
+from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
@@ -51,6 +52,9 @@ CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride
 MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
 RADIUS_BISECTIONS = 4  # halvings of the curvature interval where a stride stops being admissible
 REFINEMENTS = 4  # doublings of a plan's grid allowed to meet the accuracy contract (32 steps to 512)
+# Newton's iterations solving a plan again on its estimate's grid, from its own solution: one or two where that grid
+# is in its asymptotic range; beyond these, that grid is too coarse to estimate from (the estimate is infinite).
+ESTIMATE_ITERATIONS = 4
 StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, qd_B(0), theta_2)
 
 
@@ -342,9 +346,10 @@ class GaitPlanner:
         else solved again there from this one) and its multipliers if ``stability``."""
         from .stride import solve_stride  # strides only: a straight plan does without
 
-        def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float]):
+        def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float],
+                  settings: Settings = self.settings):
             return solve_stride(self.hybrid, on, problem.step_length, problem.period, problem.arm_amplitude,
-                                problem.mode, problem.turn_radius, start, self.settings, coarse, targets)
+                                problem.mode, problem.turn_radius, start, settings, coarse, targets)
 
         targets = np.zeros(2)
         closure = _ClosureRounds()
@@ -362,12 +367,12 @@ class GaitPlanner:
         else:  # the rounds ran out: no consistent double supports (the LPs flip between vertices)
             steps = (self._unsettled(problem, a, found, b.qd_a), self._unsettled(problem, b, found, a.qd_a))
         if estimate and all(g.converged for g in steps):
-            if coarser is None:
-                again = solve(grid.estimate, None, (a.qd_a, a.theta, b.qd_a, b.theta), (a.closure_gap, b.closure_gap))
-                ca, cb = again.steps
-                coarser = Stride(problem.turn_radius, (self.step_gait(problem, ca, found, cb.qd_a),
-                                                       self.step_gait(problem, cb, found, ca.qd_a)), None, math.nan, found)
-            steps = self._estimated(grid, problem, steps, coarser.steps)
+            def again() -> tuple[Gait, ...]:
+                ca, cb = solve(grid.estimate, None, (a.qd_a, a.theta, b.qd_a, b.theta), (a.closure_gap, b.closure_gap),
+                               self._estimate_settings).steps
+                return self.step_gait(problem, ca, found, cb.qd_a), self.step_gait(problem, cb, found, ca.qd_a)
+
+            steps = self._estimated(grid, problem, steps, coarser and coarser.steps, again)
         multipliers = None
         if stability and all(g.double_support is not None and g.double_support.impulses.success for g in steps):
             maps = [PoincareMap(self.hybrid, grid.flow, problem.period, g.double_support.impulses.i_minus,
@@ -548,21 +553,32 @@ class GaitPlanner:
         """``gait``, solved on ``grid``, with its integration error: against ``coarser``, the gait
         on the estimate's grid, or (None) its step solved again there from its own solution,
         with the same closure (``_estimated``)."""
-        if coarser is None:
+        def again() -> tuple[Gait]:
             step = gait.step
-            coarser = self.step_gait(problem, solve_bvp(
+            return self.step_gait(problem, solve_bvp(
                 self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
-                problem.closure, (step.qd_a, step.theta), self.settings, None, problem.step_width,
-                closure_target=step.closure_gap), gait.found)
-        return self._estimated(grid, problem, (gait,), (coarser,))[0]
+                problem.closure, (step.qd_a, step.theta), self._estimate_settings, None, problem.step_width,
+                closure_target=step.closure_gap), gait.found),
 
-    def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...],
-                   coarse: tuple[Gait, ...]) -> tuple[Gait, ...]:
-        """The steps of a plan (``plans``, on ``grid``) with their integration errors, from
-        ``coarse``, the same steps on the estimate's grid (``richardson``)."""
-        return tuple(replace(plan, accuracy=richardson.estimate(
-            plan, again, grid.estimate.propagate(plan.step.q0, plan.step.qd_a, problem.period).q, grid.ratio))
-            for plan, again in zip(plans, coarse))
+        return self._estimated(grid, problem, (gait,), coarser and (coarser,), again)[0]
+
+    @property
+    def _estimate_settings(self) -> Settings:
+        """The settings of a plan solved again on its estimate's grid (``ESTIMATE_ITERATIONS``)."""
+        return replace(self.settings, max_iterations=ESTIMATE_ITERATIONS)
+
+    def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...], coarse: tuple[Gait, ...] | None,
+                   again: Callable[[], tuple[Gait, ...]]) -> tuple[Gait, ...]:
+        """The steps of a plan (``plans``, on ``grid``) with their integration errors
+        (``richardson``): against ``coarse``, the same steps on the estimate's grid, if solved
+        already; else against ``again()``, the plan solved again there, unless an end point already
+        misses the contract (the plan is then refined: its figures' errors are not estimated)."""
+        ends = [grid.estimate.propagate(plan.step.q0, plan.step.qd_a, problem.period).q for plan in plans]
+        if coarse is None and all(richardson.end_point(plan, end, grid.ratio) <= END_POINT_BOUND
+                                  for plan, end in zip(plans, ends)):
+            coarse = again()
+        return tuple(replace(plan, accuracy=richardson.estimate(plan, other, end, grid.ratio))
+                     for plan, other, end in zip(plans, coarse or (None,) * len(plans), ends))
 
     def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
