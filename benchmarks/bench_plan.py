@@ -7,7 +7,9 @@ atlases) and plans ``--plans`` gaits from the atlas, each a new request of one f
 set beside the same request's second plan and the median of the others. The processes alternate with cold solves of the yardstick, so that a change of load falls
 on both. The multipliers' share: the time a plan spends in ``GaitPlanner._multipliers`` (waiting
 for the variational flow begun beside the double support, then the reset's derivative, the
-saltation and the eigenvalues), and the variational flow alone (the work the background thread does). Run:
+saltation and the eigenvalues), and the variational flow alone (the work the background thread does).
+The integration-error estimate's share: the time a plan spends in ``GaitPlanner._integration_error``
+(its step solved again on the coarse grid, with its double support and samples). Run:
 
     .venv/bin/python benchmarks/bench_plan.py [--processes N] [--plans N]
 """
@@ -35,6 +37,7 @@ def child(plans: int) -> None:
     planner = planning.GaitPlanner()
     made = time.perf_counter()
     in_multipliers = Timed(planner, "_multipliers")
+    in_estimate = Timed(planner, "_integration_error")
     times, found = [], set()
     alphas = [math.radians(15.0 + 15.0 * k / max(1, plans - 1)) for k in range(plans)]
     for alpha in alphas + alphas[:1]:
@@ -44,7 +47,7 @@ def child(plans: int) -> None:
         found.add(gait.found)
     flow = median_s(lambda: variational_flow(planner.flow, 0.45, gait.step.q0, gait.step.qd_a), 5)
     print(json.dumps({"make": made - start, "plans": times, "found": sorted(found), "multipliers": in_multipliers.calls[1:-1],
-                      "variational_flow": flow}))
+                      "estimate": in_estimate.calls[1:-1], "variational_flow": flow}))
 
 
 def main() -> None:
@@ -77,6 +80,8 @@ def main() -> None:
     flow = statistics.median(run["variational_flow"] for run in runs)
     print(f"  multipliers: {1e3 * multipliers:5.2f} ms of a plan's {1e3 * warm:5.2f} ms ({multipliers / warm:.0%}), "
           f"the wait for their flow included; beside the double support, their variational flow took {1e3 * flow:5.2f} ms of a second core")
+    estimate = statistics.median(t for run in runs for t in run["estimate"])
+    print(f"  integration-error estimate: {1e3 * estimate:5.2f} ms of a plan's {1e3 * warm:5.2f} ms ({estimate / warm:.0%})")
 
 
 if __name__ == "__main__":

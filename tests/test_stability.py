@@ -57,8 +57,8 @@ def test_a_plan_integrates_one_variational_flow_begun_at_its_last_chord_step(pla
     first: a plan from the atlas ends with that step, and integrates no other (none wasted, none
     begun again after the shooting)."""
     begun = []
-    start = planner._background.start
-    monkeypatch.setattr(planner._background, "start", lambda *args: begun.append(args) or start(*args))
+    start = planner.grid.background.start
+    monkeypatch.setattr(planner.grid.background, "start", lambda *args: begun.append(args) or start(*args))
     for mode in ("normal", "anti-normal"):
         for alpha in (5.0, 20.0, 40.0):
             gait = planner.plan(GaitRequest(0.45, 0.45, np.radians(alpha), mode))

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .accuracy import IntegrationError
 from .admissibility import Verdict, failure_message
 from .bvp import BvpSolution
 from .configurations import GaitMode
@@ -101,7 +102,7 @@ class Gait:
     ``continuation``: by continuation from the nearest admissible gait, ``cold``: from the
     straight-line start); and, when it is not admissible, a ``hint`` of where admissible gaits are;
     the open-loop Floquet multipliers of its Poincare map (``stability``, when the double support
-    was solved)."""
+    was solved); the estimate of its integration error (``accuracy``, when the BVP converged)."""
 
     problem: GaitProblem
     names: CoordinateNames
@@ -113,6 +114,7 @@ class Gait:
     found: str = "cold"
     hint: str = ""
     stability: Multipliers | None = None
+    accuracy: IntegrationError | None = None
 
     # The request's figures, as every user of a gait reads them.
     step_length = property(lambda self: self.problem.step_length, doc="L (m)")
@@ -142,6 +144,11 @@ class Gait:
     def usable(self) -> bool:
         """Converged, admissible, with a finite effort: a gait whose W counts in a study."""
         return self.converged and self.admissible and math.isfinite(self.W)
+
+    @property
+    def meets_contract(self) -> bool:
+        """Solved, and its estimated integration error within the accuracy contract."""
+        return self.accuracy is not None and self.accuracy.within_contract
 
     def warm_start(self) -> tuple[np.ndarray, float] | None:
         """The guess (qd(0), theta) a neighbouring solve can start from; None after a failure."""
@@ -173,6 +180,14 @@ class Stride:
     problem = property(lambda self: self.steps[0].problem, doc="the request (step A's)")
     converged = property(lambda self: all(s.converged for s in self.steps))
     admissible = property(lambda self: all(s.admissible for s in self.steps))
+    meets_contract = property(lambda self: all(s.meets_contract for s in self.steps),
+                              doc="both steps solved within the accuracy contract")
+
+    def warm_start(self) -> tuple[np.ndarray, float, np.ndarray, float] | None:
+        """The guess (qd_A(0), theta_1, qd_B(0), theta_2) a neighbouring solve can start from;
+        None after a failure."""
+        a, b = self.steps
+        return (a.qd_a.copy(), a.theta, b.qd_a.copy(), b.theta) if self.converged else None
 
     @property
     def reasons(self) -> tuple[str, ...]:

@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Callable, Iterable
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,9 +34,12 @@ from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, frictio
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params, names_set
 from .figures import StepFigures, energy_drift, step_figures
+from .grid import Grid
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
-from .monodromy import BackgroundVariationalFlow, SpeculativeFlow
+from .monodromy import SpeculativeFlow
+from . import richardson
+from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
@@ -48,6 +51,10 @@ CLOSURE_ROUNDS = 10  # re-solves of the closure matched to the spin moments' sha
 CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride's continuation
 MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
 RADIUS_BISECTIONS = 4  # halvings of the curvature interval where a stride stops being admissible
+REFINEMENTS = 4  # doublings of a plan's grid allowed to meet the accuracy contract (32 steps to 512)
+# Newton's iterations solving a plan again on its estimate's grid, from its own solution: one or two where that grid
+# is in its asymptotic range; beyond these, that grid is too coarse to estimate from (the estimate is infinite).
+ESTIMATE_ITERATIONS = 4
 StrideGuess = tuple[np.ndarray, float, np.ndarray, float]  # (qd_A(0), theta_1, qd_B(0), theta_2)
 
 
@@ -202,9 +209,9 @@ class GaitPlanner:
         self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
         self.hybrid = HybridStep(self.model)
-        self.flow = self.hybrid.flow(settings.fine_steps)
-        self.coarse_flow = self.hybrid.flow(settings.coarse_steps) if settings.coarse_steps < settings.fine_steps else None
-        self._background = BackgroundVariationalFlow(BallisticFlow(self.model.single, settings.fine_steps))
+        self.grid = Grid.of(self.hybrid, settings.fine_steps, settings.coarse_steps)
+        self.flow, self.coarse_flow = self.grid.flow, self.grid.coarse
+        self._refined: dict[int, Grid] = {}  # the finer grids plans were refined to, by steps
         for mode in GaitMode if modes is None else map(GaitMode.parse, modes):
             self._atlases[mode] = self._load_atlas(mode)
 
@@ -326,16 +333,28 @@ class GaitPlanner:
         return self._turning_atlases[mode]
 
     def _stride(self, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool = True) -> Stride:
-        """The stride of ``problem`` solved from ``guess`` on the fine grid, its closures matched
-        to what the spin moments do (legs leaning), with its multipliers if ``stability``."""
+        """The stride of ``problem`` solved from ``guess``, on a grid that meets the accuracy
+        contract (``_refining``), with its multipliers if ``stability``."""
+        return self._refining(lambda grid, start, coarser: self._stride_on(grid, problem, start, found, stability,
+                                                                          coarser), guess)
+
+    def _stride_on(self, grid: Grid, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
+                   coarser: Stride | None = None, estimate: bool = True) -> Stride:
+        """The stride of ``problem`` solved from ``guess`` on ``grid``, its closures matched
+        to what the spin moments do (legs leaning), with its steps' integration errors if
+        ``estimate`` (against ``coarser``, the stride on the estimate's grid, if solved already;
+        else solved again there from this one) and its multipliers if ``stability``."""
         from .stride import solve_stride  # strides only: a straight plan does without
+
+        def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float],
+                  settings: Settings = self.settings):
+            return solve_stride(self.hybrid, on, problem.step_length, problem.period, problem.arm_amplitude,
+                                problem.mode, problem.turn_radius, start, settings, coarse, targets)
 
         targets = np.zeros(2)
         closure = _ClosureRounds()
         for _ in range(CLOSURE_ROUNDS):
-            solution = solve_stride(self.hybrid, self.flow, problem.step_length, problem.period, problem.arm_amplitude,
-                                    problem.mode, problem.turn_radius, guess, self.settings, self.coarse_flow,
-                                    tuple(targets))
+            solution = solve(grid.flow, grid.coarse, guess, tuple(targets))
             a, b = solution.steps
             steps = (self.step_gait(problem, a, found, b.qd_a), self.step_gait(problem, b, found, a.qd_a))
             if not all(g.double_support is not None and g.double_support.impulses.success for g in steps):
@@ -347,9 +366,16 @@ class GaitPlanner:
             guess = (a.qd_a, a.theta, b.qd_a, b.theta)
         else:  # the rounds ran out: no consistent double supports (the LPs flip between vertices)
             steps = (self._unsettled(problem, a, found, b.qd_a), self._unsettled(problem, b, found, a.qd_a))
+        if estimate and all(g.converged for g in steps):
+            def again() -> tuple[Gait, ...]:
+                ca, cb = solve(grid.estimate, None, (a.qd_a, a.theta, b.qd_a, b.theta), (a.closure_gap, b.closure_gap),
+                               self._estimate_settings).steps
+                return self.step_gait(problem, ca, found, cb.qd_a), self.step_gait(problem, cb, found, ca.qd_a)
+
+            steps = self._estimated(grid, problem, steps, coarser and coarser.steps, again)
         multipliers = None
         if stability and all(g.double_support is not None and g.double_support.impulses.success for g in steps):
-            maps = [PoincareMap(self.hybrid, self.flow, problem.period, g.double_support.impulses.i_minus,
+            maps = [PoincareMap(self.hybrid, grid.flow, problem.period, g.double_support.impulses.i_minus,
                                 g.double_support.impulses.i_plus) for g in steps]
             jacobians = [m.jacobian(np.concatenate([g.step.q0, g.step.qd_a])) for m, g in zip(maps, steps)]
             multipliers = multipliers_of(jacobians[1] @ jacobians[0])
@@ -358,12 +384,14 @@ class GaitPlanner:
     def _radius_hint(self, problem: GaitProblem, path: list[tuple[float, StrideGuess]]) -> str:
         """The smallest radius (m) of an admissible stride along the continuation ``path`` (its
         curvatures, 1/m, and strides, from the straight gait towards the request's), by bisection
-        (``RADIUS_BISECTIONS`` halvings of the last interval), in words."""
+        (``RADIUS_BISECTIONS`` halvings of the last interval), in words. The strides it tries are
+        probes on the planner's grid, read for their admissibility only: no estimate, no refinement."""
         where = (f"L = {problem.step_length:g} m, T = {problem.period:g} s, "
                  f"alpha = {math.degrees(problem.arm_amplitude):g} deg")
 
         def admissible(curvature: float, guess: StrideGuess) -> Stride | None:
-            stride = self._stride(replace(problem, turn_radius=1.0 / curvature), guess, "continuation", stability=False)
+            stride = self._stride_on(self.grid, replace(problem, turn_radius=1.0 / curvature), guess, "continuation",
+                                     False, estimate=False)
             return stride if stride.admissible else None
 
         low, high = 0, len(path)  # path[:low] admissible (the straight gait is), path[high:] not
@@ -467,10 +495,38 @@ class GaitPlanner:
         return replace(gait, hint=atlas.hint(point))
 
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
-        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start)."""
-        shooting = SpeculativeFlow(self.flow, self._background)
+        """The gait of ``problem`` solved from ``guess`` (None: the straight-line start), on a grid
+        that meets the accuracy contract (``_refining``)."""
+        return self._refining(lambda grid, start, coarser: self._solve_on(grid, problem, start, found, coarser), guess)
+
+    def _refining(self, solve: Callable[[Grid, Any, Any], Gait | Stride], guess: Any) -> Gait | Stride:
+        """``solve(grid, guess, None)`` on the planner's grid, and again on grids of twice as many
+        steps (``REFINEMENTS`` at most, each from the last solution, which is also what its
+        estimate compares with) while it converges but its estimated integration error exceeds
+        the contract (a refined solve that fails leaves the last one, its estimate saying it
+        misses it)."""
+        grid = self.grid
+        result = solve(grid, guess, None)
+        for _ in range(REFINEMENTS):
+            if not result.converged or result.meets_contract:
+                break
+            steps = 2 * grid.steps
+            if steps not in self._refined:
+                self._refined[steps] = Grid.of(self.hybrid, steps, grid.steps)
+            grid = self._refined[steps]
+            refined = solve(grid, result.warm_start(), result)
+            if not refined.converged:
+                break
+            result = refined
+        return result
+
+    def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
+                  found: str, coarser: Gait | None = None) -> Gait:
+        """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error
+        (against ``coarser``, the gait on the estimate's grid, if solved already)."""
+        shooting = SpeculativeFlow(grid.flow, grid.background)
         step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                         problem.mode, problem.closure, guess, self.settings, self.coarse_flow, problem.step_width)
+                         problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width)
         flow = self._variational_flow(problem, step, shooting)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
@@ -479,23 +535,56 @@ class GaitPlanner:
                     abs(ds.foot_line_moment) <= self.settings.tolerance or \
                     abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
                 break  # nothing to match: the spin moments change nothing (or the closure already matches)
-            shooting = SpeculativeFlow(self.flow, self._background)
+            shooting = SpeculativeFlow(grid.flow, grid.background)
             step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, self.coarse_flow,
+                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, grid.coarse,
                              problem.step_width, closure_target=-ds.foot_line_moment)
             flow = self._variational_flow(problem, step, shooting)
             gait = self.step_gait(problem, step, found)
         else:
             gait = self._unsettled(problem, step, found)
+        if gait.converged:
+            gait = self._integration_error(grid, problem, gait, coarser)
         if gait.double_support is not None and gait.double_support.impulses.success:
-            gait = replace(gait, stability=self._multipliers(problem, step, gait.double_support.impulses, flow))
+            gait = replace(gait, stability=self._multipliers(grid, problem, step, gait.double_support.impulses, flow))
         return gait
 
-    def _multipliers(self, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
+    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
+        """``gait``, solved on ``grid``, with its integration error: against ``coarser``, the gait
+        on the estimate's grid, or (None) its step solved again there from its own solution,
+        with the same closure (``_estimated``)."""
+        def again() -> tuple[Gait]:
+            step = gait.step
+            return self.step_gait(problem, solve_bvp(
+                self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
+                problem.closure, (step.qd_a, step.theta), self._estimate_settings, None, problem.step_width,
+                closure_target=step.closure_gap), gait.found),
+
+        return self._estimated(grid, problem, (gait,), coarser and (coarser,), again)[0]
+
+    @property
+    def _estimate_settings(self) -> Settings:
+        """The settings of a plan solved again on its estimate's grid (``ESTIMATE_ITERATIONS``)."""
+        return replace(self.settings, max_iterations=ESTIMATE_ITERATIONS)
+
+    def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...], coarse: tuple[Gait, ...] | None,
+                   again: Callable[[], tuple[Gait, ...]]) -> tuple[Gait, ...]:
+        """The steps of a plan (``plans``, on ``grid``) with their integration errors
+        (``richardson``): against ``coarse``, the same steps on the estimate's grid, if solved
+        already; else against ``again()``, the plan solved again there, unless an end point already
+        misses the contract (the plan is then refined: its figures' errors are not estimated)."""
+        ends = [grid.estimate.propagate(plan.step.q0, plan.step.qd_a, problem.period).q for plan in plans]
+        if coarse is None and all(richardson.end_point(plan, end, grid.ratio) <= END_POINT_BOUND
+                                  for plan, end in zip(plans, ends)):
+            coarse = again()
+        return tuple(replace(plan, accuracy=richardson.estimate(plan, other, end, grid.ratio))
+                     for plan, other, end in zip(plans, coarse or (None,) * len(plans), ends))
+
+    def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
         """The open-loop multipliers of the solved ``step`` with its ``impulses``, from ``flow``,
-        the step's variational flow begun on the background thread (waited for here)."""
-        return open_loop(self.hybrid, self.flow, problem.period, step.q0, step.qd_a, impulses.i_minus,
+        the step's variational flow on ``grid`` begun on the background thread (waited for here)."""
+        return open_loop(self.hybrid, grid.flow, problem.period, step.q0, step.qd_a, impulses.i_minus,
                          impulses.i_plus, flow.result())
 
     def _variational_flow(self, problem: GaitProblem, step: BvpSolution,

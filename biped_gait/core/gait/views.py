@@ -62,6 +62,11 @@ def _figure(attr: str, empty: Any = NAN) -> Callable[[Gait], Any]:
     return lambda gait: getattr(gait.figures, attr) if gait.figures is not None else empty
 
 
+def _accuracy(attr: str, empty: Any = NAN) -> Callable[[Gait], Any]:
+    """A part of the plan's estimate of its integration error (``empty`` where there is none)."""
+    return lambda gait: getattr(gait.accuracy, attr) if gait.accuracy is not None else empty
+
+
 def _closure_residual(gait: Gait) -> float:
     """z_d^T D_e (Xd^a - Xd^b) (kg m^2/s) as the double support saw it (after the slack
     correction), else the BVP's closure gap."""
@@ -141,6 +146,12 @@ FIELDS: tuple[Field, ...] = (
     Field("impact_equation_residual", _impulse("equation_residual", NAN)),
     Field("lp_duality_gap", _impulse("duality_gap", NAN)),
     Field("energy_drift", _figure("energy_drift")),
+    # The plan's estimate of its integration error (docs/model.md section 4.11) and its grid.
+    Field("integration_error_end_point", _accuracy("end_point")),
+    Field("integration_error_W", _accuracy("W")),
+    Field("integration_error_figures", _accuracy("figures")),
+    Field("integration_error_samples", _accuracy("samples")),
+    Field("grid_steps", _accuracy("steps", 0)),
     Field("dynamics_evaluations", lambda g: g.step.evaluations),
     Field("multipliers", lambda g: [[v.real, v.imag] for v in g.stability.values] if g.stability else []),
     Field("multiplier_moduli", lambda g: np.abs(g.stability.values) if g.stability else [], "multiplier_moduli"),
@@ -217,6 +228,11 @@ def summary(gait: Gait) -> str:
             f"impact eqs {d['impact_equation_residual']:.1e}, LP duality {d['lp_duality_gap']:.1e}, "
             f"energy drift {d['energy_drift']:.1e}",
         ]
+    if gait.accuracy is not None:
+        e = gait.accuracy
+        lines.append(f"integration error (estimated, {e.steps} RK8 steps): end point {e.end_point:.1e} rad, W {e.W:.1e}, "
+                     f"figures {e.figures:.1e} (relative), samples {e.samples:.1e}; "
+                     f"{'within' if e.within_contract else 'beyond'} the contract")
     if gait.stability is not None:
         moduli = ", ".join(f"{m:.3g}" for m in np.abs(gait.stability.values[:6]))
         lines.append(f"open-loop Floquet multipliers |lambda| {moduli}, ...: spectral radius "
