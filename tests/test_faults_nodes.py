@@ -43,6 +43,7 @@ pytestmark = [pytest.mark.faults, pytest.mark.ros]
 STOP_WITHIN = 2.0  # s from the signal to the process's end
 ROUNDS = 10  # per signal and per situation: 2 signals x 2 situations x 10 = 40 stops
 BATCH = 4  # nodes started at once
+WALKERS = 2  # simulators walking in real time at once: one a core (more, and a stop times the scheduler)
 
 
 def log_of(where: Path, entry: str) -> str:
@@ -65,12 +66,12 @@ def signal_and_time(proc: subprocess.Popen, sig: int) -> tuple[int, float]:
     return status, time.monotonic() - start
 
 
-def batches(tmp_path: Path, start) -> Iterator[list[tuple[Path, object]]]:
-    """``ROUNDS`` rounds in batches of ``BATCH``: each round a folder of its own and what
+def batches(tmp_path: Path, start, size: int = BATCH) -> Iterator[list[tuple[Path, object]]]:
+    """``ROUNDS`` rounds in batches of ``size``: each round a folder of its own and what
     ``start(folder)`` returns for it."""
-    for first in range(0, ROUNDS, BATCH):
+    for first in range(0, ROUNDS, size):
         rounds = []
-        for i in range(first, min(first + BATCH, ROUNDS)):
+        for i in range(first, min(first + size, ROUNDS)):
             where = tmp_path / f"round{i}"
             where.mkdir()
             rounds.append((where, start(where)))
@@ -149,7 +150,7 @@ def test_the_simulator_stops_cleanly_during_walks(planner, side, tmp_path, sig):
     subscription = side.node.create_subscription(JointState, "/joint_states", lambda _msg: None, 10)
     results = []
     start = lambda where: simulator(where, planner, "steps:=0", "real_time_factor:=1.0", "chunk_size:=4096")  # noqa: E731
-    for rounds in batches(tmp_path, start):
+    for rounds in batches(tmp_path, start, WALKERS):
         for where, proc in rounds:
             wait_for(lambda: "walking L =" in log_of(where, "biped-gait-simulator") or proc.poll() is not None, 90.0,
                      "the walk did not start")
