@@ -41,6 +41,10 @@ class Held:
     chain: ClosedChain
     law: Callable[[np.ndarray, np.ndarray], np.ndarray]
 
+    def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """qdd (rad/s^2) of the closed chain at (``q``, ``qd``) under the law's torques."""
+        return self.chain.forward(q, qd, self.law(q, qd))[0]
+
 
 @dataclass(frozen=True, eq=False)
 class Motion:

@@ -20,7 +20,7 @@ import numpy as np
 from ...dynamics.flow import hermite_samples
 from ...dynamics.hybrid import HybridStep
 from ..finite_support import passive_impact
-from .engine import Motion
+from .engine import Held, Motion
 
 
 @dataclass
@@ -42,15 +42,11 @@ class HybridSegment:
     touchdown: bool
 
 
-def held_step(motion: Motion, q: np.ndarray, qd: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """One classical RK4 step of ``h`` s of the closed chain of ``motion.held``, its joints driven by
-    its law at each stage."""
-    chain, law = motion.held.chain, motion.held.law
-
-    def rate(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return chain.forward(a, b, law(a, b))[0]
-
-    k1 = qd, rate(q, qd)
+def held_step(held: Held, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """One classical RK4 step of ``h`` s of the closed chain of ``held``, its joints driven by its
+    law at each stage, from (``q``, ``qd``) whose acceleration is ``qdd``."""
+    rate = held.acceleration
+    k1 = qd, qdd
     k2 = qd + h / 2 * k1[1], rate(q + h / 2 * k1[0], qd + h / 2 * k1[1])
     k3 = qd + h / 2 * k2[1], rate(q + h / 2 * k2[0], qd + h / 2 * k2[1])
     k4 = qd + h * k3[1], rate(q + h * k3[0], qd + h * k3[1])
@@ -81,10 +77,10 @@ class HybridEngine:
         h, t = motion.h, ws.t
         dt = t_stop - t if t < t_stop < t + h else h
         if motion.held is not None:
-            q, qd = held_step(motion, ws.q, ws.qd, dt)
-            chain, law = motion.held.chain, motion.held.law
-            qdd = [chain.forward(a, b, law(a, b))[0] for a, b in ((ws.q, ws.qd), (q, qd))]
-            nodes = (np.array([t, t + dt]), np.array([ws.q, q]), np.array([ws.qd, qd]), np.array(qdd))
+            qdd = motion.held.acceleration(ws.q, ws.qd)  # RK4's first stage and the segment's first node
+            q, qd = held_step(motion.held, ws.q, ws.qd, qdd, dt)
+            nodes = (np.array([t, t + dt]), np.array([ws.q, q]), np.array([ws.qd, qd]),
+                     np.array([qdd, motion.held.acceleration(q, qd)]))
             ws.t, ws.q, ws.qd = t + dt, q, qd
             return HybridSegment(nodes, ws.t, False)
         run = self.flow.propagate(ws.q, ws.qd, dt, keep_nodes=True)
