@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import mujoco
 import numpy as np
@@ -65,14 +66,15 @@ class Record:
 
 @dataclass
 class MujocoWorkspace:
-    """One walk in MuJoCo: the stance tree's data and the floating robot's (``floor``), MuJoCo's
-    state's time in the walk (s), the step's start in the walk (``origin``), the current phase's
-    torque pulses (times in the walk), or its feet held (``held``: the floating robot's state is the
-    walk's, ``measured`` the model's state measured from it, ``placed`` where its tips were put
-    down, m), and the records at the grid nodes since the phase began."""
+    """One walk in MuJoCo: the stance tree's data and the floating robot's (``floor``, made with the
+    first phase that holds both feet), MuJoCo's state's time in the walk (s), the step's start in
+    the walk (``origin``), the current phase's torque pulses (times in the walk), or its feet held
+    (``held``: the floating robot's state is the walk's, ``measured`` the model's state measured
+    from it, ``placed`` where its tips were put down, m), and the records at the grid nodes since
+    the phase began."""
 
     data: mujoco.MjData
-    floor: mujoco.MjData
+    floor: mujoco.MjData | None = None
     t: float = 0.0
     origin: float = 0.0
     pulses: tuple[Pulse, ...] = ()
@@ -108,10 +110,15 @@ class MujocoEngine:
         self._shin = model.body("stance_shin").id
         self._swing_tip = model.site(SWING_TIP).id
         self.contact_friction = params.friction
-        self.floating = FloatingRobot(hybrid.samples, self.h)
+
+    @cached_property
+    def floating(self) -> FloatingRobot:
+        """The floating export both feet stand on, made with the first phase that holds them
+        (a walk that never stands does without)."""
+        return FloatingRobot(self.hybrid.samples, self.h)
 
     def workspace(self) -> MujocoWorkspace:
-        return MujocoWorkspace(mujoco.MjData(self.model), self.floating.data())
+        return MujocoWorkspace(mujoco.MjData(self.model))
 
     # MuJoCo ------------------------------------------------------------------------------------
     def _torque(self, ws: MujocoWorkspace, t0: float, t1: float | None = None) -> np.ndarray:
@@ -194,6 +201,8 @@ class MujocoEngine:
         ws.held = motion.held
         ws.records = [r for r in ws.records if r.t > origin + t - RECORD_MATCH]
         if motion.held is not None:
+            if ws.floor is None:
+                ws.floor = self.floating.data()
             if ws.measured is None or not (np.array_equal(q, ws.measured[0]) and np.array_equal(qd, ws.measured[1])):
                 self.floating.place(ws.floor, q, qd)  # onto the floor: the walk's start, or a state given
                 ws.floor.time = ws.t = origin + t
