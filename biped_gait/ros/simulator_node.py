@@ -235,7 +235,6 @@ class SimulatorNode(Node):
         self.exit_requested = threading.Event()
         self.failed = False
         self._recording_failure = ""
-        self._recording_failed = threading.Event()  # set by the recorder's writer thread: the walk ends
         if value["record"]:
             try:
                 self.recorder = self._new_recorder()
@@ -284,11 +283,10 @@ class SimulatorNode(Node):
     def _new_recorder(self) -> BackgroundRecorder:
         """A recording of its own under ``record_dir``; ``ValueError`` if it cannot be made."""
         stamp = datetime.now(timezone.utc).strftime("%Y%m%dT%H%M%S_%f")
-        self._recording_failed.clear()
         try:
             recorder = BackgroundRecorder(RecorderProcess(self.value["record_dir"], f"walk_{stamp}",
                                                           chunk_size=self.value["chunk_size"]),
-                                          on_failure=lambda _error: self._recording_failed.set())
+                                          on_failure=lambda _error: None)  # the walk reads its failure at its next record
         except RecordingError as exc:
             raise ValueError(str(exc)) from None
         self.get_logger().info(f"recording to {recorder.bag_dir}")
@@ -613,7 +611,7 @@ class SimulatorNode(Node):
         published = recorded = 0
 
         def record() -> None:  # the samples published since the last call; the walk ends if recording failed
-            if self._recording_failed.is_set():
+            if recorder.failure:
                 raise RecordingError(recorder.failure)
             recorder.write_samples(SampleRows(names, tuple(e[recorded:published] for e in encoded),
                                               stamps_ns[recorded:published]))
