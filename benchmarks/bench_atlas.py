@@ -3,8 +3,9 @@
 1. ``plan`` on random requests inside the atlas (L 0.25..0.65 m, T 0.30..0.65 s, alpha 0..45
    deg, both modes; fixed seed): median solve time from the atlas against the cold solve
    (``plan(..., cold=True)``: the straight-line start, what ``plan`` did before the atlas) of the
-   same requests, in the same run; how each gait was found; how many cold solves end on the
-   backward-knee twin or nowhere while the atlas answers.
+   same requests, in the same run, and against the straightforward cold solve
+   (``yardsticks.ColdSolve``); how each gait was found and on which grid; how many cold solves
+   end on the backward-knee twin or nowhere while the atlas answers.
 2. The Fig. 4 study (186 gaits, six chains) on local worker processes, as a count of the
    straightforward cold solves (``yardsticks.ColdSolve``) measured in the same run.
 3. The shipped atlases: build time (recorded when built) and file size.
@@ -69,6 +70,16 @@ def main() -> None:
           f"found by {found}")
     print(f"  cold solve:     median {ms(cold_times):7.2f} ms   (the same requests, this run)")
     print(f"  ratio cold / atlas: {statistics.median(cold_times) / statistics.median(atlas_times):.2f}x")
+    yardstick = ColdSolve()
+    straightforward = median_s(yardstick.solve, 5)
+    steps = {}
+    for request in requests:
+        gait = planner.plan(request)
+        if gait.accuracy is not None:
+            steps[gait.accuracy.steps] = steps.get(gait.accuracy.steps, 0) + 1
+    print(f"  the straightforward cold solve (yardstick, this run): {1e3 * straightforward:7.1f} ms = "
+          f"{straightforward / statistics.median(atlas_times):.1f} plans from the atlas (median); their grids "
+          f"(RK8 steps per T: plans) {dict(sorted(steps.items()))}")
     print(f"  {admissible} requests admissible; the cold solve is not admissible for {cold_wrong} of them "
           "(backward-knee twin or no convergence)")
 

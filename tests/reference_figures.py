@@ -181,11 +181,6 @@ WORD = Same("a word or a flag of the request or of the verdict")
 PHYSICAL = Close(FIGURE, "a figure of the solution (FIGURE)")
 ZERO_BY_CONSTRUCTION = Close(FIGURE, "zero by construction up to rounding: compared at the scale of the gait's "
                              "velocities, 1 m/s", floor=1.0)
-# An atlas node the planner now refines to meet the accuracy contract (docs/model.md section 4.11):
-# the shipped atlases were built on 32 steps before it, so such a node holds that grid's values,
-# off by its error (measured: 2.3e-9 of min_swing_height at L = 0.4 m, T = 0.625 s, where the end
-# point misses q_T by 3.8e-8 rad), within the contract of the refined plan's.
-REFINED = Close(1e-8, "an atlas node the planner now refines: its 32-step value, within the accuracy contract")
 _RK8_STAGES = 12
 
 

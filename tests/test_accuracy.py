@@ -12,7 +12,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from biped_gait.core.dynamics.impulses import ZERO_REACTION
 from biped_gait.core.dynamics.settings import DEFAULTS
+from biped_gait.core.gait.atlas import NodeStatus
+from biped_gait.core.gait.bvp import solve_bvp
+from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait import planner as planner_module
 from biped_gait.core.gait.accuracy import END_POINT_BOUND, FIGURE_BOUND, FIGURES, SAMPLED, relative_error
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
@@ -150,6 +154,49 @@ def test_without_refinement_the_coarse_plan_says_it_misses_the_contract(solved, 
     true_end = _end_point(coarse, fine)
     assert true_end > END_POINT_BOUND and coarse.accuracy.end_point >= true_end
     assert not coarse.accuracy.within_contract and coarse.accuracy.steps == 8
+
+
+def test_the_shootings_coarse_solution_is_the_estimate_grids_own(planner, solved):
+    """The estimate compares a plan with its step on the coarse grid as the shooting leaves it
+    (``BvpSolution.coarse``): converged there to the BVP's tolerance, it is the coarse grid's own
+    solution, the one solving the step again there from the plan's solution gives (to 1e-12)."""
+    request, plan, *_ = solved[0]
+    coarse = plan.step.coarse
+    assert coarse is not None and coarse.converged and coarse.nodes[0].size == DEFAULTS.coarse_steps + 1
+    assert coarse.end_residual <= DEFAULTS.tolerance and abs(coarse.closure_gap) <= DEFAULTS.tolerance
+    again = solve_bvp(planner.hybrid, planner.coarse_flow, request.step_length, request.period, request.arm_amplitude,
+                      request.mode, "theta", plan.warm_start(), DEFAULTS)
+    assert again.converged and np.max(np.abs(again.qd_a - coarse.qd_a)) <= 1e-12 * np.max(np.abs(coarse.qd_a))
+    assert abs(again.theta - coarse.theta) <= 1e-12
+    assert plan.accuracy.figures <= FIGURE_BOUND
+
+
+def test_a_plan_from_the_atlas_starts_on_its_nodes_grid(planner):
+    """Near atlas nodes solved on 64 steps (slow gaits: 32 miss the end point's 1e-9 rad), a plan
+    starts on 64 steps and solves once: its estimate against the shooting's own 32-step solution."""
+    atlas = planner.atlas(GaitMode.NORMAL)
+    index = next(i for i in zip(*np.nonzero(atlas.nodes["grid_steps"] == 2 * DEFAULTS.fine_steps))
+                 if atlas.status(i) == NodeStatus.ADMISSIBLE)
+    point = atlas.grid.point(index)
+    assert atlas.grid_steps(point) >= 2 * DEFAULTS.fine_steps
+    calls = []
+    solve_on = planner._solve_on
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(planner, "_solve_on", lambda grid, *args: calls.append(grid.steps) or solve_on(grid, *args))
+        gait = planner.plan(GaitRequest(*point, GaitMode.NORMAL))
+    assert gait.found == "atlas" and gait.meets_contract and calls == [gait.accuracy.steps] == [atlas.grid_steps(point)]
+    assert gait.step.coarse.nodes[0].size == gait.accuracy.steps // 2 + 1
+
+
+def test_a_reaction_at_rounding_level_has_no_friction_ratio_to_refine(planner):
+    """A swing foot that lands at rest (L = 0.25 m, T = 0.3 s, alpha = 30 deg, anti-normal) leaves
+    the passive impact I_R2 at rounding level (1e-10 N s): its friction ratio is 0, not the ratio of
+    two rounding errors (which read 0.49 here and moved by 1e-4 from one grid to the next, so the
+    plan refined its grid to 512 steps in vain); the plan meets the contract on 32."""
+    gait = planner.plan(GaitRequest(0.25, 0.3, math.radians(30.0), "anti-normal"))
+    impulses = gait.double_support.impulses
+    assert np.linalg.norm(impulses.ir2) <= ZERO_REACTION and gait.double_support.impulse_friction_ratios[1] == 0.0
+    assert gait.meets_contract and gait.accuracy.steps == DEFAULTS.fine_steps, gait.accuracy
 
 
 def test_a_stride_meets_the_contract_step_by_step(planners):

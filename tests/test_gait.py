@@ -93,6 +93,22 @@ def test_lp_optimum_is_certified_two_ways(planner, paper_lp_gait):
     assert res.fun == pytest.approx(default_gait.W, rel=1e-7)
 
 
+def test_lp_started_from_a_nearby_basis_finds_the_same_optimum(planner, default_gait):
+    """The LP of a nearby double support (the gait of alpha 2 deg larger) started from the default
+    gait's optimal basis: the same optimum as started cold (W and the impulses to rounding), and
+    the basis it ends on is the cold start's."""
+    near = planner.plan(dataclasses.replace(DEFAULT_REQUEST, arm_amplitude=DEFAULT_REQUEST.arm_amplitude + math.radians(2)))
+    problem = impact_problem(planner, near)
+    cold = solve_impulses(problem, "l1")
+    warm = solve_impulses(problem, "l1", start=default_gait.double_support.impulses.basis)
+    assert cold.success and warm.success and warm.duality_gap < 1e-9
+    assert warm.W == pytest.approx(cold.W, rel=1e-12)
+    assert np.max(np.abs(warm.x - cold.x)) <= 1e-12 * np.max(np.abs(cold.x))
+    assert all(np.array_equal(a, b) for a, b in zip(warm.basis, cold.basis))
+    other_shape = tuple(status[:-1] for status in default_gait.double_support.impulses.basis)
+    assert solve_impulses(problem, "l1", start=other_shape).W == pytest.approx(cold.W, rel=1e-12)  # ignored
+
+
 def test_ground_reaction_two_ways(planner, default_gait):
     samples = default_gait.figures.samples
     flow = planner.flow

@@ -64,22 +64,25 @@ def test_the_tolerances_catch_a_real_change():
 
 
 def _nodes(atlas, count: int) -> list[tuple[int, int, int]]:
-    """``count`` admissible nodes of ``atlas`` spread over its grid (every n-th, in index order)."""
+    """``count`` admissible nodes of ``atlas`` that met the accuracy contract, spread over its grid
+    (every n-th, in index order), and the first of those solved on its finest grid (refined to
+    meet it)."""
     from biped_gait.core.gait.atlas import NodeStatus
 
-    admissible = np.argwhere(atlas.nodes["status"] == NodeStatus.ADMISSIBLE)
-    return [tuple(int(i) for i in admissible[k]) for k in np.linspace(0, len(admissible) - 1, count).astype(int)]
+    admissible = np.argwhere((atlas.nodes["status"] == NodeStatus.ADMISSIBLE) & (atlas.nodes["grid_steps"] > 0))
+    spread = [tuple(int(i) for i in admissible[k]) for k in np.linspace(0, len(admissible) - 1, count).astype(int)]
+    steps = atlas.nodes["grid_steps"][tuple(admissible.T)]
+    return spread + [tuple(int(i) for i in admissible[int(np.argmax(steps))])]
 
 
 @pytest.mark.parametrize("params", ["aoustin2013", "aoustin2013-table", "aoustin2013-hips"])
 def test_the_shipped_atlases_nodes_are_gaits_of_this_machine(params):
     """Some nodes of each shipped straight atlas, solved again here from their own warm start:
     the same gait (W, theta, qd(0), the least vertical ground reaction and swing height, the
-    spectral radius) within the plans' tolerances (within ``REFINED`` where the planner refines the
-    node's grid to meet the accuracy contract). An atlas holds results computed elsewhere: it
+    spectral radius) within the plans' tolerances, on the grid the node records (the one the
+    planner refines it to, to meet the accuracy contract). An atlas holds results computed elsewhere: it
     stays current on another machine because it is tied to the inputs and the code (its
     fingerprint), and it is right there because its nodes solve there."""
-    from biped_gait.core.dynamics.settings import DEFAULTS
     from biped_gait.core.gait.configurations import GaitMode
     from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 
@@ -91,13 +94,12 @@ def test_the_shipped_atlases_nodes_are_gaits_of_this_machine(params):
             gait = planner.plan(GaitRequest(L, T, alpha, mode), (atlas.nodes["qd_a"][index].copy(),
                                                                  float(atlas.nodes["theta"][index])))
             assert gait.admissible, (params, mode, index, gait.reasons)
-            refined = gait.accuracy.steps != DEFAULTS.fine_steps
+            assert gait.accuracy.steps == atlas.nodes["grid_steps"][index], (params, mode, index)
             for key, now in (("W", gait.W), ("theta", gait.theta), ("qd_a", gait.step.qd_a.tolist()),
                              ("min_grf_z", gait.figures.min_grf_z),
                              ("min_swing_height", gait.figures.min_swing_height)):
                 stored = atlas.nodes[key][index]
-                check = ref.REFINED if refined else ref.TOLERANCES[key]
-                wrong = check.mismatch(now, stored.tolist())
+                wrong = ref.TOLERANCES[key].mismatch(now, stored.tolist())
                 assert not wrong, f"{params} {mode.value} node {index} {key}: {wrong}"
             wrong = ref.TOLERANCES["spectral_radius"].mismatch(gait.stability.spectral_radius,
                                                                float(atlas.nodes["spectral_radius"][index]))

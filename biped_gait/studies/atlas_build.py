@@ -51,6 +51,7 @@ def node_record(gait: Gait | None, on_branch: bool) -> dict[str, object]:
     record: dict[str, object] = {
         "status": NodeStatus.ADMISSIBLE if gait.admissible else NodeStatus.INADMISSIBLE,
         "limits": gait.verdict.limits, "qd_a": gait.step.qd_a, "theta": gait.theta, "W": gait.W,
+        "grid_steps": gait.accuracy.steps if gait.meets_contract else 0,
     }
     if gait.figures is not None:
         f = gait.figures

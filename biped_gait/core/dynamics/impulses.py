@@ -46,6 +46,11 @@ from ..model.biped import BipedModel
 EFFORTS = ("l1", "l2")
 COORDINATES = ("joint", "absolute")
 CONE_SIDES = 8  # the friction cone's inscribed pyramid
+# N s: a reaction impulse this small is zero: its size is below what the plan knows of it (1e-8 at
+# the unit scale, docs/model.md section 4.11), and its direction is rounding's (a touchdown at rest
+# leaves I_R2 at about 1e-10 N s, whose friction ratio read anything from 0 to 0.5 from one grid to
+# the next, and would read inf with a vertical component of -1e-16).
+ZERO_REACTION = 1e-8
 
 
 @dataclass(frozen=True)
@@ -245,6 +250,7 @@ class ImpulseSolution:
     closure_residual: float
     layout: ImpactLayout
     duality_gap: float = float("nan")
+    basis: tuple[np.ndarray, np.ndarray] | None = None  # the l1 LP's optimal basis (HiGHS's column and row statuses)
 
     xd_minus = property(lambda self: self.x[self.layout.xd_minus], doc="Xd^-: after I^-, before the impact")
     i_minus = property(lambda self: self.x[self.layout.i_minus], doc="I^-: joint impulses before the impact (N m s)")
@@ -324,12 +330,16 @@ def effort(x: np.ndarray, layout: ImpactLayout, reading: np.ndarray | None = Non
 
 def friction_ratios(solution: ImpulseSolution) -> np.ndarray:
     """|horizontal| / vertical of the three reaction impulses I_R1^-, I_R2, I_R2^+: the friction
-    coefficient each needs (inf where the vertical component is zero and the horizontal not)."""
+    coefficient each needs (inf where the vertical component is zero and the horizontal not; 0
+    for a reaction within ``ZERO_REACTION`` of zero, whose direction is rounding's)."""
     out = np.empty(3)
     for k, force in enumerate((solution.ir1_minus, solution.ir2, solution.ir2_plus)):
         fx, fy, fz = force
         horizontal = math.hypot(fx, fy)
-        out[k] = horizontal / fz if fz > 0 else (0.0 if horizontal == 0 else math.inf)
+        if math.hypot(horizontal, fz) <= ZERO_REACTION:
+            out[k] = 0.0
+        else:
+            out[k] = horizontal / fz if fz > 0 else (0.0 if horizontal == 0 else math.inf)
     return out
 
 
@@ -479,27 +489,43 @@ def _pass_model(highs: highspy.Highs, lp: _L1Program) -> None:
     )
 
 
-def solve_l1(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -> ImpulseSolution:
+def _basis(statuses: tuple[np.ndarray, np.ndarray]) -> highspy.HighsBasis:
+    """A HiGHS basis from its column and row statuses (``ImpulseSolution.basis``)."""
+    basis = highspy.HighsBasis()
+    basis.col_status = list(map(highspy.HighsBasisStatus, statuses[0].tolist()))
+    basis.row_status = list(map(highspy.HighsBasisStatus, statuses[1].tolist()))
+    basis.valid = True
+    return basis
+
+
+def solve_l1(problem: ImpactProblem, options: EffortOptions = EffortOptions(),
+             start: tuple[np.ndarray, np.ndarray] | None = None) -> ImpulseSolution:
     """Minimize W = sum |reading I| as an LP in (x, t) with -t <= reading I <= t, by HiGHS;
-    certify by duality."""
+    certify by duality. ``start``: the basis of a nearby LP of the same shape
+    (``ImpulseSolution.basis``), from which the simplex starts (none of its iterations, as a rule,
+    where a cold start takes about 40: a quarter of the time); the optimum is the same where it
+    is unique."""
     equations = problem.equations()
     lp = _l1_program(problem, equations, options)
     highs = _highs()
     _pass_model(highs, lp)
+    if start is not None and start[0].size == lp.a.shape[1] and start[1].size == lp.a.shape[0]:
+        highs.setBasis(_basis(start))
     highs.run()
     status = highs.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
         message = f"impulse LP: model status is {highs.modelStatusToString(status)}"
         return _finish(problem, equations, "l1", options, np.full(problem.layout.unknowns, np.nan), False, message)
     solution = highs.getSolution()
-    status = np.array(highs.getBasis().col_status, dtype=np.int8)
+    basis = highs.getBasis()
+    status = np.array(basis.col_status, dtype=np.int8)
     row_dual = np.array(solution.row_dual)
     y_lower = np.where(status == int(highspy.HighsBasisStatus.kLower), solution.col_dual, 0.0)
     y_upper = np.where(status == int(highspy.HighsBasisStatus.kUpper), solution.col_dual, 0.0)
     gap = duality_gap(lp, highs.getInfo().objective_function_value, row_dual[lp.inequalities :],
                       row_dual[: lp.inequalities], y_lower, y_upper)
     return _finish(problem, equations, "l1", options, np.array(solution.col_value[: problem.layout.unknowns]), True,
-                   "optimal", duality_gap=gap)
+                   "optimal", duality_gap=gap, basis=(status, np.array(basis.row_status, dtype=np.int8)))
 
 
 def duality_gap(lp: _L1Program, objective: float, y_eq: np.ndarray, y_ub: np.ndarray, y_lower: np.ndarray,
@@ -566,10 +592,12 @@ def solve_l2(problem: ImpactProblem, options: EffortOptions = EffortOptions()) -
     return _finish(problem, equations, "l2", options, x, ok, "optimal" if ok else f"impulse QP: {reason}")
 
 
-def solve_impulses(problem: ImpactProblem, effort_name: str = "l1", options: EffortOptions = EffortOptions()) -> ImpulseSolution:
-    """Solve eqs. (6)-(10) for the effort ``l1`` (LP, HiGHS) or ``l2`` (QP, OSQP) with ``options``."""
+def solve_impulses(problem: ImpactProblem, effort_name: str = "l1", options: EffortOptions = EffortOptions(),
+                   start: tuple[np.ndarray, np.ndarray] | None = None) -> ImpulseSolution:
+    """Solve eqs. (6)-(10) for the effort ``l1`` (LP, HiGHS; from the basis ``start``, if given)
+    or ``l2`` (QP, OSQP) with ``options``."""
     if effort_name == "l1":
-        return solve_l1(problem, options)
+        return solve_l1(problem, options, start)
     if effort_name == "l2":
         return solve_l2(problem, options)
     raise ValueError(f"unknown effort {effort_name!r}: use 'l1' or 'l2'")

@@ -91,13 +91,13 @@ def newton(fun: NewtonResidual, x0: np.ndarray, tol: float, max_iter: int) -> So
 
 def chord(
     fun: ChordResidual, x0: np.ndarray, jacobian: np.ndarray, tol: float, max_steps: int,
-    contraction: float | None = None,
+    contraction: float | None = None, start: tuple[np.ndarray, Any] | None = None,
 ) -> SolveResult:
     """Chord steps x <- x - J^-1 F(x) with the fixed ``jacobian`` from ``x0``; ``fun(x)`` gives
-    (F, aux). With ``contraction``, a step must shrink the max-norm of F by that factor or the
-    iteration stops (``STALLED``) at the last accepted iterate."""
+    (F, aux), ``start`` (F, aux) at ``x0`` if known. With ``contraction``, a step must shrink the
+    max-norm of F by that factor or the iteration stops (``STALLED``) at the last accepted iterate."""
     x = np.asarray(x0, float)
-    f, aux = fun(x)
+    f, aux = fun(x) if start is None else start
     norm = max_norm(f)
     steps = 0
     while True:

@@ -7,7 +7,10 @@ warm start of a solve nearby), its status (admissible; inadmissible on the branc
 conditions that limit it; only the backward-knee twin converges; nothing converges), and the
 figures the studies and maps use: W (N m s), min vertical ground reaction (N), min swing
 height (m), max friction ratio, min swing-knee angle q9 (rad), yaw angular momenta at T- and T+
-(kg m^2/s), the spectral radius of the open-loop Poincare map. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``
+(kg m^2/s), the spectral radius of the open-loop Poincare map, and the RK8 steps per T of the
+grid the planner solved it on to meet the accuracy contract (docs/model.md section 4.11; 0
+where nothing converged, or where the plan missed the contract: its refinement failed): a plan
+near it starts on that grid. An atlas is tied to its parameters and model code by ``fingerprint.model_fingerprint``
 (and recognized at once by ``fingerprint.source_fingerprint`` when the code is byte for byte the
 one it was built with): a stale or unreadable file is refused with a one-line message that says how
 to rebuild it.
@@ -54,6 +57,7 @@ NODE_ARRAYS = {
     "max_friction_ratio": ((), np.float64), "q9_min": ((), np.float64), "h_t_minus": ((2,), np.float64),
     "h_t_plus": ((2,), np.float64), "spectral_radius": ((), np.float64),
     "min_late_swing_height": ((), np.float64), "swing_arrival_speed": ((), np.float64),
+    "grid_steps": ((), np.uint16),
 }
 
 
@@ -149,7 +153,7 @@ class Atlas:
         grid = grid or Grid.default()
         nodes = {}
         for name, (_, dtype) in NODE_ARRAYS.items():
-            fill = NodeStatus.NO_CONVERGENCE if name == "status" else (Limit.NO_CONVERGENCE if name == "limits" else np.nan)
+            fill = {"status": NodeStatus.NO_CONVERGENCE, "limits": Limit.NO_CONVERGENCE, "grid_steps": 0}.get(name, np.nan)
             nodes[name] = np.full(grid.shape + node_tail(name, params), fill, dtype=dtype)
         return cls(params.name, mode, model_fingerprint(params), params.friction, grid, nodes,
                    source=source_fingerprint(params))
@@ -192,6 +196,14 @@ class Atlas:
             return None
         idx = min(on_branch, key=lambda c: float(np.sum((np.array(c[1]) - frac) ** 2)))[0]
         return self.nodes["qd_a"][idx].copy(), float(self.nodes["theta"][idx])
+
+    def grid_steps(self, point: tuple[float, float, float]) -> int:
+        """The RK8 steps per T a plan at (L, T, alpha) starts on: the most any corner of its grid
+        cell met the accuracy contract on (0 outside the grid, or where none did)."""
+        if not self.grid.contains(point):
+            return 0
+        lower, _ = self.grid.cell(point)
+        return int(np.max(self.nodes["grid_steps"][tuple(slice(i, i + 2) for i in lower)]))
 
     def admissible_near(self, point: tuple[float, float, float]) -> bool:
         """Whether a corner of the grid cell holding (L, T, alpha) is admissible (False

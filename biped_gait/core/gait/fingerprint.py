@@ -20,12 +20,13 @@ from pathlib import Path
 
 from ..model.params import BipedParams
 
-ATLAS_FORMAT = 3
+ATLAS_FORMAT = 4
 _CORE = Path(__file__).resolve().parents[1]
-# The modules whose code decides a gait's solution and verdict (paths in the core).
+# The modules whose code decides a gait's solution and verdict, and the grid it is solved on (paths in the core).
 MODEL_CODE = ("model/joints.py", "model/biped.py", "model/exchange.py", "gait/configurations.py", "dynamics/rk8_tableau.py", "dynamics/flow.py",
               "dynamics/hybrid.py", "dynamics/newton.py", "gait/bvp.py", "dynamics/impulses.py", "dynamics/samples.py",
               "gait/figures.py", "gait/admissibility.py", "gait/stability.py", "dynamics/settings.py",
+              "gait/accuracy.py", "gait/richardson.py",
               "dynamics/native/flow.cpp", "dynamics/native/samples.cpp")
 
 

@@ -51,7 +51,7 @@ CLOSURE_ROUNDS = 10  # re-solves of the closure matched to the spin moments' sha
 CURVATURE_STEP = 0.1  # 1/m: the largest change of 1 / R in one step of a stride's continuation
 MIN_CURVATURE_STEP = 1e-3  # 1/m: below this the continuation is given up
 RADIUS_BISECTIONS = 4  # halvings of the curvature interval where a stride stops being admissible
-REFINEMENTS = 4  # doublings of a plan's grid allowed to meet the accuracy contract (32 steps to 512)
+REFINEMENTS = 4  # doublings of the planner's grid allowed to meet the accuracy contract (32 steps to 512)
 # Newton's iterations solving a plan again on its estimate's grid, from its own solution: one or two where that grid
 # is in its asymptotic range; beyond these, that grid is too coarse to estimate from (the estimate is infinite).
 ESTIMATE_ITERATIONS = 4
@@ -460,7 +460,7 @@ class GaitPlanner:
         first = None
         guess = atlas.guess(point) if atlas is not None else None
         if guess is not None:
-            first = self._solve(problem, guess, "atlas")
+            first = self._solve(problem, guess, "atlas", atlas.grid_steps(point))
             if not _near(first, guess):
                 first = None
             elif first.admissible or not atlas.admissible_near(point):
@@ -494,26 +494,36 @@ class GaitPlanner:
             return gait
         return replace(gait, hint=atlas.hint(point))
 
-    def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str) -> Gait:
+    def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str,
+               steps: int = 0) -> Gait:
         """The gait of ``problem`` solved from ``guess`` (None: the straight-line start), on a grid
-        that meets the accuracy contract (``_refining``)."""
-        return self._refining(lambda grid, start, coarser: self._solve_on(grid, problem, start, found, coarser), guess)
+        that meets the accuracy contract (``_refining``), from ``steps`` per T (the atlas's; 0:
+        the planner's own grid)."""
+        return self._refining(lambda grid, start, coarser: self._solve_on(grid, problem, start, found, coarser), guess,
+                              self._grid(steps))
 
-    def _refining(self, solve: Callable[[Grid, Any, Any], Gait | Stride], guess: Any) -> Gait | Stride:
-        """``solve(grid, guess, None)`` on the planner's grid, and again on grids of twice as many
-        steps (``REFINEMENTS`` at most, each from the last solution, which is also what its
-        estimate compares with) while it converges but its estimated integration error exceeds
-        the contract (a refined solve that fails leaves the last one, its estimate saying it
-        misses it)."""
-        grid = self.grid
+    def _grid(self, steps: int) -> Grid:
+        """The planner's grid, or one of ``steps`` per T if that is finer (Newton's iterations on
+        half as many)."""
+        if steps <= self.grid.steps:
+            return self.grid
+        if steps not in self._refined:
+            self._refined[steps] = Grid.of(self.hybrid, steps, steps // 2)
+        return self._refined[steps]
+
+    def _refining(self, solve: Callable[[Grid, Any, Any], Gait | Stride], guess: Any, grid: Grid | None = None
+                  ) -> Gait | Stride:
+        """``solve(grid, guess, None)`` on ``grid`` (default: the planner's), and again on grids of
+        twice as many steps (up to ``REFINEMENTS`` doublings of the planner's grid, each from the
+        last solution, which is also what its estimate compares with) while it converges but its
+        estimated integration error exceeds the contract (a refined solve that fails leaves the
+        last one, its estimate saying it misses it)."""
+        grid = grid or self.grid
         result = solve(grid, guess, None)
-        for _ in range(REFINEMENTS):
+        while grid.steps < self.grid.steps << REFINEMENTS:
             if not result.converged or result.meets_contract:
                 break
-            steps = 2 * grid.steps
-            if steps not in self._refined:
-                self._refined[steps] = Grid.of(self.hybrid, steps, grid.steps)
-            grid = self._refined[steps]
+            grid = self._grid(2 * grid.steps)
             refined = solve(grid, result.warm_start(), result)
             if not refined.converged:
                 break
@@ -526,7 +536,8 @@ class GaitPlanner:
         (against ``coarser``, the gait on the estimate's grid, if solved already)."""
         shooting = SpeculativeFlow(grid.flow, grid.background)
         step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                         problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width)
+                         problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width,
+                         with_coarse=True)
         flow = self._variational_flow(problem, step, shooting)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
@@ -538,7 +549,7 @@ class GaitPlanner:
             shooting = SpeculativeFlow(grid.flow, grid.background)
             step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
                              problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, grid.coarse,
-                             problem.step_width, closure_target=-ds.foot_line_moment)
+                             problem.step_width, closure_target=-ds.foot_line_moment, with_coarse=True)
             flow = self._variational_flow(problem, step, shooting)
             gait = self.step_gait(problem, step, found)
         else:
@@ -551,14 +562,18 @@ class GaitPlanner:
 
     def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
         """``gait``, solved on ``grid``, with its integration error: against ``coarser``, the gait
-        on the estimate's grid, or (None) its step solved again there from its own solution,
-        with the same closure (``_estimated``)."""
+        on the estimate's grid, or (None) its step's solution on that grid (the shooting's coarse
+        one, else its step solved again there from its own solution, with the same closure),
+        its double support's LP started from the plan's basis (``_estimated``)."""
         def again() -> tuple[Gait]:
-            step = gait.step
-            return self.step_gait(problem, solve_bvp(
-                self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
-                problem.closure, (step.qd_a, step.theta), self._estimate_settings, None, problem.step_width,
-                closure_target=step.closure_gap), gait.found),
+            step, near = gait.step, gait.double_support and gait.double_support.impulses
+            if step.coarse is None or grid.estimate is not grid.coarse:
+                step = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
+                                 problem.mode, problem.closure, (step.qd_a, step.theta), self._estimate_settings, None,
+                                 problem.step_width, closure_target=step.closure_gap)
+            else:
+                step = step.coarse
+            return self.step_gait(problem, step, gait.found, near=near),
 
         return self._estimated(grid, problem, (gait,), coarser and (coarser,), again)[0]
 
@@ -603,15 +618,16 @@ class GaitPlanner:
         return self.step_gait(problem, replace(step, converged=False, message=message), found, next_qd_a)
 
     def step_gait(self, problem: GaitProblem, step: BvpSolution, found: str,
-                  next_qd_a: np.ndarray | None = None) -> Gait:
+                  next_qd_a: np.ndarray | None = None, near: ImpulseSolution | None = None) -> Gait:
         """The gait of one solved ballistic step: its double support towards ``next_qd_a`` (the next
         step's initial velocity, its own coordinates; default the step's own: a periodic gait), its
-        figures and the verdict; no stability."""
+        LP started from the basis of ``near``'s (a nearby double support's), its figures and the
+        verdict; no stability."""
         double_support = figures = None
         within_limits = None
         if step.converged:
             double_support, within_limits = self._double_support(step, problem,
-                                                                 step.qd_a if next_qd_a is None else next_qd_a)
+                                                                 step.qd_a if next_qd_a is None else next_qd_a, near)
             figures = self._figures(step, problem.period)
         impulses = double_support.impulses if double_support else None
         verdict = with_margins(judge(step, impulses, figures, problem.options.friction,
@@ -619,8 +635,8 @@ class GaitPlanner:
                                impulses, figures, problem.options.friction, problem.margins, within_limits)
         return Gait(problem, self.model.coordinate_names, step, double_support, figures, verdict, math.nan, found)
 
-    def _double_support(self, step: BvpSolution, problem: GaitProblem,
-                        next_qd_a: np.ndarray) -> tuple[DoubleSupport, ImpulseSolution | None]:
+    def _double_support(self, step: BvpSolution, problem: GaitProblem, next_qd_a: np.ndarray,
+                        near: ImpulseSolution | None = None) -> tuple[DoubleSupport, ImpulseSolution | None]:
         """The double support towards ``next_qd_a`` with the impulses under the request's
         margins, and, when those have no solution but the margins narrow the impulse problem, the
         impulses under the limits alone (else None)."""
@@ -633,7 +649,7 @@ class GaitPlanner:
             # Paper comparison: theta = 0 and the smallest change of Xd^a along z_d that makes
             # eqs. (6)-(10) consistent.
             lp, slack = lp.reachable()
-        sol = solve_impulses(lp, problem.effort, problem.impulse_options)
+        sol = solve_impulses(lp, problem.effort, problem.impulse_options, near and near.basis)
         within_limits = None
         if not sol.success and problem.impulse_options != problem.limit_options:
             within_limits = solve_impulses(lp, problem.effort, problem.limit_options)
