@@ -185,10 +185,12 @@ _RK8_STAGES = 12
 
 
 def _coarse_iteration() -> int:
-    """Dynamics evaluations of one coarse-grid Newton iteration (RK8 stages x coarse steps)."""
+    """Dynamics evaluations of one coarse-grid iteration: RK8 stages x coarse steps, and the end
+    node's acceleration where the flow keeps its nodes (the chord step that settles the coarse
+    solution a plan's estimate reads)."""
     from biped_gait.core.dynamics.settings import DEFAULTS
 
-    return DEFAULTS.coarse_steps * _RK8_STAGES
+    return DEFAULTS.coarse_steps * _RK8_STAGES + 1
 
 
 TOLERANCES: dict[str, Any] = {
