@@ -26,7 +26,8 @@ pytestmark = pytest.mark.core
 
 REFERENCE_STEPS = 256  # RK8 steps per T of the converged values
 # (parameter set, L m, T s, alpha deg, mode, extra request fields): both modes, both closures, both
-# efforts, a long slow step and a short quick one, and the 13-DOF set with its legs leaning.
+# efforts, a long slow step and a short quick one, the 13-DOF set with its legs leaning, and a slow
+# gait the planner refines.
 REQUESTS = (
     ("aoustin2013", 0.45, 0.45, 23.5, "normal", {}),
     ("aoustin2013", 0.40, 0.45, 21.1, "anti-normal", {}),
@@ -34,7 +35,9 @@ REQUESTS = (
     ("aoustin2013", 0.50, 0.50, 30.0, "normal", {"closure": "slack"}),
     ("aoustin2013", 0.35, 0.40, 10.0, "normal", {"effort": "l2"}),
     ("aoustin2013-hips", 0.45, 0.45, 20.0, "normal", {}),
+    ("aoustin2013", 0.40, 0.625, 20.0, "normal", {}),  # slow: 32 steps miss the end point's bound
 )
+SLOW = 6  # the index of the slow request
 CONVERGED = 1e-11  # the reference's own change from halving its step, far below the contract
 ROUNDING = 1e-12  # what rounding leaves of a figure (relative) or of an end point (rad): below it errors are noise
 # Every multiplier (of the spectral radius): the reset's central differences (docs/model.md section 8.9) know
@@ -98,12 +101,13 @@ def _multipliers(plan, reference) -> float:
 
 def test_the_reference_is_converged(solved):
     """Halving the reference's step moves none of its figures by more than 1e-11 and its end point
-    by less than 1e-12 rad: it is the converged value, to far better than the contract."""
+    by at most 1e-11 rad (1.4e-12 at T = 0.625 s, below 1e-12 at the others), and the reference
+    ends within 1e-12 rad of q_T: it is the converged value, to far better than the contract."""
     for request, _, reference, halved, fine in solved:
         assert reference.converged and halved.converged, request
         worst = max(_true_errors(halved, reference).items(), key=lambda item: item[1])
         assert worst[1] <= CONVERGED, (request, worst)
-        assert _end_point(reference, fine) <= ROUNDING and _end_point(halved, fine) <= ROUNDING, request
+        assert _end_point(reference, fine) <= ROUNDING and _end_point(halved, fine) <= CONVERGED, request
 
 
 def test_every_figure_of_a_plan_meets_the_contract(solved):
@@ -117,7 +121,9 @@ def test_every_figure_of_a_plan_meets_the_contract(solved):
         assert _end_point(plan, fine) <= END_POINT_BOUND, request
         assert _multipliers(plan, reference) <= MULTIPLIERS, request
         assert relative_error(plan.stability.spectral_radius, reference.stability.spectral_radius) <= FIGURE_BOUND
-        assert plan.accuracy.within_contract and plan.accuracy.steps == DEFAULTS.fine_steps, (request, plan.accuracy)
+        slow = request is solved[SLOW][0]  # on its atlas node's grid: 64 steps
+        assert plan.accuracy.within_contract, (request, plan.accuracy)
+        assert plan.accuracy.steps > DEFAULTS.fine_steps if slow else plan.accuracy.steps == DEFAULTS.fine_steps
 
 
 def test_the_estimate_bounds_the_true_error(solved):

@@ -198,12 +198,17 @@ class Atlas:
         return self.nodes["qd_a"][idx].copy(), float(self.nodes["theta"][idx])
 
     def grid_steps(self, point: tuple[float, float, float]) -> int:
-        """The RK8 steps per T a plan at (L, T, alpha) starts on: the most any corner of its grid
-        cell met the accuracy contract on (0 outside the grid, or where none did)."""
+        """The RK8 steps per T a plan at (L, T, alpha) starts on: those its grid cell's nearest
+        corner met the accuracy contract on, else the most any corner did (0 outside the grid, or
+        where none did). The grid a gait needs grows with T (section 4.11 of docs/model.md): at
+        T = 0.625 s, 64 steps, where the cell's corners at 0.65 s need 128; a plan that needs more
+        than its corner's refines."""
         if not self.grid.contains(point):
             return 0
-        lower, _ = self.grid.cell(point)
-        return int(np.max(self.nodes["grid_steps"][tuple(slice(i, i + 2) for i in lower)]))
+        lower, fractions = self.grid.cell(point)
+        steps = self.nodes["grid_steps"]
+        nearest = int(steps[tuple(i + int(f > 0.5) for i, f in zip(lower, fractions))])
+        return nearest or int(np.max(steps[tuple(slice(i, i + 2) for i in lower)]))
 
     def admissible_near(self, point: tuple[float, float, float]) -> bool:
         """Whether a corner of the grid cell holding (L, T, alpha) is admissible (False
