@@ -109,6 +109,14 @@ def test_lp_started_from_a_nearby_basis_finds_the_same_optimum(planner, default_
     assert solve_impulses(problem, "l1", start=other_shape).W == pytest.approx(cold.W, rel=1e-12)  # ignored
 
 
+def test_a_gait_without_samples_keeps_its_figures_not_its_grids(default_gait):
+    """What a study keeps of a gait: its figures, neither its nodes nor its step on the coarse grid."""
+    assert default_gait.step.coarse is not None and default_gait.step.nodes is not None
+    slim = default_gait.without_samples()
+    assert slim.step.nodes is None and slim.step.coarse is None
+    assert slim.W == default_gait.W and slim.accuracy == default_gait.accuracy
+
+
 def test_ground_reaction_two_ways(planner, default_gait):
     samples = default_gait.figures.samples
     flow = planner.flow

@@ -155,9 +155,10 @@ class Gait:
         return (self.step.qd_a.copy(), self.step.theta) if self.converged else None
 
     def without_samples(self) -> "Gait":
-        """This gait without its sampled trajectory and integration nodes (what studies keep)."""
+        """This gait without its sampled trajectory and integration nodes, nor its step on the
+        coarse grid (what studies keep)."""
         figures = self.figures.without_samples() if self.figures is not None else None
-        return replace(self, step=replace(self.step, nodes=None), figures=figures)
+        return replace(self, step=replace(self.step, nodes=None, coarse=None), figures=figures)
 
 
 
