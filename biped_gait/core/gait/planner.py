@@ -567,7 +567,7 @@ class GaitPlanner:
         its double support's LP started from the plan's basis (``_estimated``)."""
         def again() -> tuple[Gait]:
             step, near = gait.step, gait.double_support and gait.double_support.impulses
-            if step.coarse is None or grid.estimate is not grid.coarse:
+            if step.coarse is None:  # a grid without a coarse flow (its estimate's is then half of it)
                 step = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
                                  problem.mode, problem.closure, (step.qd_a, step.theta), self._estimate_settings, None,
                                  problem.step_width, closure_target=step.closure_gap)
