@@ -16,6 +16,7 @@ import re
 import struct
 import time
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 import rclpy
@@ -189,7 +190,7 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
         while "walking L =" not in log.read_text() and time.monotonic() < deadline:
             time.sleep(0.1)
         port = int(match.group(1))
-        channels, received = asyncio.run(foxglove_client(port))
+        channels, received = asyncio.run(foxglove_client(port, until=counted))
         both, _ = asyncio.run(foxglove_client(port, ["foxglove.websocket.v1", "foxglove.sdk.v1"]))
         with pytest.raises(websockets.InvalidStatus) as refused:
             asyncio.run(foxglove_client(port, ["foxglove.websocket.v1"]))
@@ -201,7 +202,7 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
     assert channels["/diagnostics"]["schemaName"] == "diagnostic_msgs/msg/DiagnosticArray"
     health = deserialize_message(received["/diagnostics"][-1], DiagnosticArray)
     assert health.status[0].name == "biped_gait_simulator: walk"
-    assert deserialize_message(received["/biped_gait_simulator/iterations"][-1], UInt64).data > 0
+    assert counted(received), [deserialize_message(m, UInt64).data for m in received.get(COUNTER, [])]
     assert {"/robot_description", "/tf", "/tf_static", "/joint_states", "/angular_momentum"} <= set(channels)
     assert channels["/joint_states"]["schemaName"] == "sensor_msgs/msg/JointState"
     assert channels["/joint_states"]["encoding"] == "cdr" and channels["/joint_states"]["schemaEncoding"] == "ros2msg"
@@ -212,12 +213,22 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
     assert odom is None or deserialize_message(odom[0], Odometry).header.frame_id == "odom"
 
 
+COUNTER = "/biped_gait_simulator/iterations"  # the step counter: latched, then published 10 times a second
+
+
+def counted(received: dict[str, list[bytes]]) -> bool:
+    """A step count above 0 has come. The latched count a client gets on subscribing may be the 0
+    published before the walk's first step, and 10 joint states can come before the next count."""
+    return any(deserialize_message(m, UInt64).data > 0 for m in received.get(COUNTER, []))
+
+
 async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.sdk.v1",),
-                          wanted: tuple[str, ...] = ("/robot_description", "/diagnostics")
+                          wanted: tuple[str, ...] = ("/robot_description", "/diagnostics"),
+                          until: Callable[[dict[str, list[bytes]]], bool] = lambda received: True,
                           ) -> tuple[dict[str, dict], dict[str, list[bytes]]]:
     """Connect with the Foxglove protocol offering ``subprotocols``, subscribe to every channel,
-    and collect messages until 10 joint states and one of each ``wanted`` topic have come:
-    (topic -> channel, topic -> payloads)."""
+    and collect messages until 10 joint states and one of each ``wanted`` topic have come and
+    ``until`` holds of them, or for 60 s at most: (topic -> channel, topic -> payloads)."""
     async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=list(subprotocols)) as ws:
         assert ws.subprotocol == "foxglove.sdk.v1"
         channels: dict[str, dict] = {}
@@ -229,7 +240,9 @@ async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.
         await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
             {"id": k, "channelId": channels[topic]["id"]} for k, topic in topics.items()]}))
         received: dict[str, list[bytes]] = {}
-        while len(received.get("/joint_states", [])) < 10 or not set(wanted) <= set(received):
+        deadline = time.monotonic() + 60.0
+        while (len(received.get("/joint_states", [])) < 10 or not set(wanted) <= set(received)
+               or not until(received)) and time.monotonic() < deadline:
             message = await asyncio.wait_for(ws.recv(), 30.0)
             if isinstance(message, bytes) and message[0] == 1:  # message data: op, subscription, log time, payload
                 _, subscription, _ = struct.unpack_from("<BIQ", message)
