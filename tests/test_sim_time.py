@@ -233,9 +233,9 @@ async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.
         assert ws.subprotocol == "foxglove.sdk.v1"
         channels: dict[str, dict] = {}
         while "/joint_states" not in channels:
-            message = json.loads(await asyncio.wait_for(ws.recv(), 30.0))
-            if message["op"] == "advertise":
-                channels.update({c["topic"]: c for c in message["channels"]})
+            message = await asyncio.wait_for(ws.recv(), 30.0)  # the server's time (binary op 2) may come first
+            if isinstance(message, str) and (text := json.loads(message))["op"] == "advertise":
+                channels.update({c["topic"]: c for c in text["channels"]})
         topics = {k: c["topic"] for k, c in enumerate(channels.values())}
         await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
             {"id": k, "channelId": channels[topic]["id"]} for k, topic in topics.items()]}))
