@@ -25,6 +25,7 @@ PUSH_DIRECTIONS = ("forward", "forward-left", "left", "backward-left", "backward
                    "forward-right")
 PUSH_PHASE = 0.5  # fraction of T: mid-step
 MOMENTUM_RATE = 0.25  # the walker's momentum steering rate (core.walking.steering.DEFAULT_RATE)
+MAP_STRIDE = 2  # the maps' optima on every other atlas node (studies.maps.MAP_STRIDE)
 
 
 def _run(parser: argparse.ArgumentParser, target: str) -> None:
@@ -135,6 +136,9 @@ def _results_page(sub) -> None:
     page.add_argument("--walk-alpha-step", type=float, default=5.0, metavar="DEG",
                       help="spacing of the arm amplitudes of the walk section's closed loops and largest pushes (deg), "
                       "default 5 (the pushes take about 5 s of CPU time per direction and amplitude)")
+    page.add_argument("--map-stride", type=int, default=MAP_STRIDE, metavar="N",
+                      help=f"the maps' optima on one atlas node in N along L and T, default {MAP_STRIDE} (every other "
+                      "one; each optimum takes about a second of CPU time)")
     page.add_argument("--push-directions", nargs="+", default=list(PUSH_DIRECTIONS), choices=PUSH_DIRECTIONS,
                       metavar="NAME", help="directions of the walk section's largest pushes, default all: "
                       f"{', '.join(PUSH_DIRECTIONS)}")

@@ -86,7 +86,7 @@ def made_up_maps(margins: str) -> WalkingMaps:
     region[:, :2] = 1
     optima = [Optimum(0.40, 0.50, 0.4, 30.0, 33.0, True), Optimum(0.50, 0.50, 0.5, 35.0, math.nan, False)]
     return WalkingMaps("aoustin2013", GaitMode.NORMAL, margins, np.array([0.35, 0.40, 0.45, 0.50]),
-                       np.array([0.35, 0.40, 0.45, 0.50]), region, [], optima)
+                       np.array([0.35, 0.40, 0.45, 0.50]), region, [], optima, 2)
 
 
 def test_margin_maps_say_their_margins_and_explain_their_blank_cells():

@@ -11,14 +11,14 @@ import shlex
 import pytest
 
 from biped_gait.arguments import request_fields
-from biped_gait.cli_parser import GAIT_VERBS, MAX_CASES, MOMENTUM_RATE, PUSH_DIRECTIONS, PUSH_PHASE, build_parser
+from biped_gait.cli_parser import GAIT_VERBS, MAP_STRIDE, MAX_CASES, MOMENTUM_RATE, PUSH_DIRECTIONS, PUSH_PHASE, build_parser
 from biped_gait.core.dynamics.impulses import COORDINATES, EFFORTS
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.gait.bvp import CLOSURES
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.walking.steering import DEFAULT_RATE
 from biped_gait.gait_options import ALPHA_RANGE_DEG, MARGINS, MODES, OPTION_BY_NAME, OPTIONS, POINT
-from biped_gait.studies import push_study
+from biped_gait.studies import maps, push_study
 from biped_gait.studies.sweep import MAX_CASES as SWEEP_MAX_CASES
 
 pytestmark = pytest.mark.core
@@ -96,6 +96,7 @@ def test_the_old_dialects_are_gone(capsys, line, message):
 def test_the_parsers_constants_are_the_studies():
     assert PUSH_DIRECTIONS == tuple(push_study.STUDY_DIRECTIONS)
     assert PUSH_PHASE == push_study.PHASE and MOMENTUM_RATE == DEFAULT_RATE and MAX_CASES == SWEEP_MAX_CASES
+    assert MAP_STRIDE == maps.MAP_STRIDE
 
 
 def test_0_means_unset_where_0_is_not_a_value_the_same_on_every_verb():

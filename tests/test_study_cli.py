@@ -55,6 +55,7 @@ def test_sweep_writes_csv_json_and_figures(tmp_path):
         (["optimize-arms", "--mode", "hop"], "argument --mode: invalid choice: 'hop'"),
         (["figure", "fig6"], "argument name: invalid choice: 'fig6'"),
         (["plan", "--step-length", "abc"], "argument --step-length: invalid float value: 'abc'"),
+        (["results-page", "--map-stride", "0"], "--map-stride: must be 1 or more, got 0"),
     ],
 )
 def test_bad_input_is_one_line_and_status_2(tmp_path, args, message):
@@ -140,9 +141,12 @@ def test_figure_commands_write_png(tmp_path, name, options):
 
 @pytest.mark.timeout(300)
 def test_results_page_is_generated_with_its_figures(tmp_path):
+    """Every section and figure of the page, on coarse spacings (the arm amplitudes, the walk's
+    amplitudes, the maps' optima on one atlas node in 4 along L and T) and a part of the pulses
+    and push directions (docs/results.md is made with the finer defaults)."""
     page = tmp_path / "docs" / "results.md"
     proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "45", "--workers", "2",
-               "--pulse-durations", "5", "--push-directions", "left", "right", timeout=280)
+               "--pulse-durations", "5", "--push-directions", "left", "right", "--map-stride", "4", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
     for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
@@ -161,6 +165,7 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
+    assert "from optimizations on one atlas node in 4 along L and T, these maps" in text
     assert "| 5 | 20 | " in text and "The largest d tried that walks 20 steps: 5 ms." in text  # MuJoCo, 5 ms pulses
     assert "| forward | - | - | - |" in text and "The walker takes larger pushes to the " in text  # left and right only
 

@@ -16,12 +16,13 @@ from .output import check_json, write_json
 
 
 def document(maps: WalkingMaps) -> dict:
-    """The maps' numbers: the region's category per (L, T) node, the boundary, the optima."""
+    """The maps' numbers: the region's category per (L, T) node, the boundary, the optima (on one
+    atlas node in ``optima_stride`` along L and T)."""
     return {"params": maps.params, "mode": str(maps.mode), "margins": maps.margins,
             "step_lengths": maps.step_lengths, "periods": maps.periods,
             "region": [[CATEGORIES[c] for c in row] for row in maps.region.tolist()],
             "boundary": [{"step_length": length, "min_period": period} for length, period in maps.boundary],
-            "optima": [{"step_length": o.step_length, "period": o.period, "alpha": o.alpha, "W": o.W,
+            "optima_stride": maps.stride, "optima": [{"step_length": o.step_length, "period": o.period, "alpha": o.alpha, "W": o.W,
                         "other_mode_W": o.other_W, "interior": o.interior} for o in maps.optima]}
 
 

@@ -9,8 +9,9 @@ through the margins asked (``Atlas.within``: nodes filtered, not rebuilt): a nod
 admissible if the gait is at some alpha; otherwise it is marked with the condition that limits
 it at the most alphas, or as meeting the limits but not the margins. The boundary T_min(L) is
 found by bisection along T on the human-like branch (at ``BOUNDARY_ALPHA``), the optima by
-``optimize.optimal_arm_amplitude`` on every other atlas node of the admissible region, both with
-the options, in parallel on an executor.
+``optimize.optimal_arm_amplitude`` on one atlas node in ``stride`` along L and T of the
+admissible region (every other one by default, ``MAP_STRIDE``), both with the options, in
+parallel on an executor.
 L in m, T in s, alpha in rad (figures and text in degrees), W in N m s.
 """
 
@@ -38,6 +39,7 @@ from .executors import planner_for
 from .optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, compare_modes
 
 BOUNDARY_ALPHA = math.radians(25.0)  # rad: near the optima of the default set
+MAP_STRIDE = 2  # the optima on every other atlas node in L and T
 ADMISSIBLE = "admissible"
 MARGINS_ONLY = "within the limits, not the margins"
 TWIN_ONLY = "backward-knee twin only"
@@ -68,7 +70,8 @@ class Optimum:
 class WalkingMaps:
     """The maps of one parameter set and ``mode``: the region per atlas (L, T) node (category
     names), the boundary (L, T_min) pairs, and the optima on the coarser grid; ``margins``
-    names the margins asked ('' if none)."""
+    names the margins asked ('' if none); the optima are on one atlas node in ``stride`` along
+    L and T."""
 
     params: str
     mode: GaitMode
@@ -78,6 +81,13 @@ class WalkingMaps:
     region: np.ndarray  # (L, T): index into CATEGORIES
     boundary: list[tuple[float, float]]
     optima: list[Optimum]
+    stride: int
+
+    @property
+    def optima_nodes(self) -> str:
+        """Which atlas nodes hold the optima, in words."""
+        return {1: "every atlas node", 2: "every other atlas node"}.get(
+            self.stride, f"one atlas node in {self.stride} along L and T")
 
 
 def region(atlas: Atlas) -> np.ndarray:
@@ -130,7 +140,7 @@ def _optimum(params: BipedParams, step_length: float, period: float, coarse_step
                    optimum.interior)
 
 
-def compute_maps(params: BipedParams, executor: Executor, stride: int = 2, coarse_step: float = COARSE_STEP,
+def compute_maps(params: BipedParams, executor: Executor, stride: int = MAP_STRIDE, coarse_step: float = COARSE_STEP,
                  alpha_range: tuple[float, float] = ALPHA_RANGE, options: Mapping[str, object] | None = None,
                  mode: GaitMode | str = GaitMode.NORMAL) -> WalkingMaps:
     """The maps of ``params`` and ``mode`` from its current atlas seen through the margins of
@@ -159,7 +169,7 @@ def compute_maps(params: BipedParams, executor: Executor, stride: int = 2, coars
     boundary = [(length, future.result()) for length, future in boundary_tasks.items()]
     optima = [o for o in (f.result() for f in optimum_tasks) if o is not None]
     return WalkingMaps(params.name, mode, problem.margins.text(problem.options.rate_bound), grid.step_lengths,
-                       grid.periods, cells, boundary, optima)
+                       grid.periods, cells, boundary, optima, stride)
 
 
 # Figures -------------------------------------------------------------------------------------
@@ -211,13 +221,13 @@ def _no_gait(ax, maps: WalkingMaps) -> list[Patch]:
     ax.pcolormesh(_edges(lengths), _edges(periods), none, cmap=ListedColormap([NO_GAIT_COLOUR]), vmin=0.0, vmax=1.0)
     within = " within the margins" if maps.margins else ""
     return [Patch(color=NO_GAIT_COLOUR, label=f"no admissible {maps.mode} gait{within} (the region map says why)"),
-            Patch(facecolor="white", edgecolor="#999999", label=f"admissible{within}; optima at every other atlas "
-                  "node only")]
+            Patch(facecolor="white", edgecolor="#999999", label=f"admissible{within}; optima at {maps.optima_nodes} "
+                  "only")]
 
 
 def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure, digits: int = 1,
                  mark_ends: bool = False, missing: str = "") -> list:
-    """Tiles of ``values`` at the optima's (L, T) (every other atlas node), each with its value in
+    """Tiles of ``values`` at the optima's (L, T) (``maps.optima_nodes``), each with its value in
     ``digits`` decimals (as many as the colour bar's range needs to tell the tiles apart), dark
     text on light tiles, over the cells without an admissible gait shaded; a value that is not
     finite is an empty tile marked '-', ``missing`` saying why; ``mark_ends``: outline the tiles
@@ -261,7 +271,7 @@ def optimum_figure(maps: WalkingMaps) -> Figure:
                            "optimal arm amplitude alpha* (deg)", fig, mark_ends=True)
     _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True)
     fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2, markerscale=0.5)
-    fig.suptitle(f"The optimal arm swing over the admissible region (every other atlas node), {_heading(maps)}",
+    fig.suptitle(f"The optimal arm swing over the admissible region ({maps.optima_nodes}), {_heading(maps)}",
                  fontsize="medium")
     left.set_title("alpha*(L, T)", fontsize="medium")
     right.set_title("W*(L, T)", fontsize="medium")

@@ -25,7 +25,7 @@ from ..core.gait.planner import GaitPlanner, GaitRequest
 from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
 from .human_walking import human_comparison
-from .maps import WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
+from .maps import MAP_STRIDE, WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
 from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
@@ -352,7 +352,7 @@ def maps_figures(maps: WalkingMaps) -> dict[str, tuple]:
 def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> list[str]:
     lines = ["", "## Where walking is possible (maps beyond the paper)", "",
              "The paper studied three points. From the gait atlas (every (L, T, alpha) node solved on the human-like "
-             "branch by continuation, `biped-gait atlas build`) and from optimizations on every other atlas node, "
+             f"branch by continuation, `biped-gait atlas build`) and from optimizations on {all_maps[0].optima_nodes}, "
              "these maps show where an admissible ballistic gait exists, what limits it elsewhere, and how the "
              "optimal arm swing and its effort vary. `biped-gait maps` draws them for any parameter set.", ""]
     for maps in all_maps:
@@ -475,12 +475,14 @@ def render(
 def write_results_page(out: Path, executor: Executor, coarse_step: float = COARSE_STEP,
                        walk_alpha_step: float = WALK_ALPHA_STEP,
                        pulse_durations: Sequence[float] = PULSE_DURATIONS,
-                       push_directions: Sequence[str] = tuple(STUDY_DIRECTIONS)) -> list[Path]:
+                       push_directions: Sequence[str] = tuple(STUDY_DIRECTIONS),
+                       map_stride: int = MAP_STRIDE) -> list[Path]:
     """Compute the study for both parameter sets (``PARAMETER_SETS``) on ``executor``, write
     the figures beside ``out`` and the page to ``out``; returns the paths written.
     ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes;
     ``pulse_durations`` (s): the double supports walked in MuJoCo (none: no such section);
-    ``push_directions``: the walk section's push directions (names of ``push_study.STUDY_DIRECTIONS``)."""
+    ``push_directions``: the walk section's push directions (names of ``push_study.STUDY_DIRECTIONS``);
+    ``map_stride``: the maps' optima on one atlas node in ``map_stride`` along L and T."""
     out = Path(out)
     studies = run_study(executor, [load_params(n) for n in PARAMETER_SETS], TABLE_CASES, coarse_step=coarse_step)
     references = {n: Reference.compute(n) for n in PARAMETER_SETS}
@@ -493,7 +495,7 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     }
     for study in studies[1:]:
         figures[f"Fig. 4, parameter set {study.params.name}"] = (study.fig4(), f"fig4-{study.params.name}.png")
-    all_maps = [compute_maps(study.params, executor, coarse_step=coarse_step) for study in studies]
+    all_maps = [compute_maps(study.params, executor, map_stride, coarse_step) for study in studies]
     for maps in all_maps:
         figures.update(maps_figures(maps))
     extensions = _extensions(default, executor, all_maps, coarse_step, walk_alpha_step, pulse_durations, push_directions)
