@@ -41,8 +41,11 @@ PLANNER = "replay_test_planner"
 REPLAY = str(Path(sys.executable).parent / "biped-gait-replay")
 TYPES = {"/joint_states": JointState, "/odom": Odometry, "/angular_momentum": AngularMomentum,
          "/gait_events": GaitEvent, "/tf": TFMessage}
-INTERVAL_TOLERANCE = 5e-3  # s, on 99 % of the intervals between successive /joint_states messages
-HICCUP_TOLERANCE = 0.05  # s, on every interval (the listener's process may be scheduled late once)
+# s, on 99 % of the intervals between successive /joint_states messages (2 ms apart: 500 Hz). The
+# replay's wake-ups are the OS scheduler's: its 99th percentile measured 0.4 to 3.3 ms on a quiet
+# 2-core machine, 3.3 to 7.2 ms beside three CPU-bound processes (and 5.3 ms in a CI run).
+INTERVAL_TOLERANCE = 10e-3
+HICCUP_TOLERANCE = 0.05  # s, on every interval (the replay's process may be scheduled late once)
 DURATION_TOLERANCE = 0.02  # relative, on the time from the first to the last /joint_states message
 
 
@@ -120,9 +123,9 @@ def intervals(stamps) -> np.ndarray:
 
 
 def assert_paced(errors: np.ndarray) -> None:
-    """The received intervals' errors (s) against the recording's: 99 % within
-    ``INTERVAL_TOLERANCE``, every one within ``HICCUP_TOLERANCE`` (the stamps are the listener's
-    reception times, so one late wake-up of its process is not the replay's pacing)."""
+    """The replayed intervals' errors (s) against the recording's: 99 % within
+    ``INTERVAL_TOLERANCE``, every one within ``HICCUP_TOLERANCE`` (the stamps are the replay's
+    publish times, DDS source timestamps: its pacing and its process's wake-ups)."""
     assert np.quantile(errors, 0.99) < INTERVAL_TOLERANCE, f"99th percentile interval error {np.quantile(errors, 0.99):.4f} s"
     assert errors.max() < HICCUP_TOLERANCE, f"worst interval error {errors.max():.4f} s"
 
