@@ -141,11 +141,12 @@ def test_figure_commands_write_png(tmp_path, name, options):
 
 @pytest.mark.timeout(300)
 def test_results_page_is_generated_with_its_figures(tmp_path):
-    """Every section and figure of the page, on coarse spacings (the arm amplitudes, the walk's
-    amplitudes, the maps' optima on one atlas node in 4 along L and T) and a part of the pulses
-    and push directions (docs/results.md is made with the finer defaults)."""
+    """Every section and figure of the page, on coarse spacings (the arm amplitudes; the walk's
+    closed loops and pushes at alpha 0 only, and alpha*; the maps' optima on one atlas node in 4
+    along L and T) and a part of the pulses and push directions (docs/results.md is made with the
+    finer defaults)."""
     page = tmp_path / "docs" / "results.md"
-    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "45", "--workers", "2",
+    proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "90", "--workers", "2",
                "--pulse-durations", "5", "--push-directions", "left", "right", "--map-stride", "4", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
@@ -166,6 +167,7 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
     assert "from optimizations on one atlas node in 4 along L and T, these maps" in text
+    assert "by differences of the walker's step, L = 0.40, 0.45, 0.50 m, alpha 0 deg" in text
     assert "| 5 | 20 | " in text and "The largest d tried that walks 20 steps: 5 ms." in text  # MuJoCo, 5 ms pulses
     assert "| forward | - | - | - |" in text and "The walker takes larger pushes to the " in text  # left and right only
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
@@ -69,6 +70,7 @@ def test_the_walking_section_and_its_figures(default_gait, planner, tmp_path):
     assert all((tmp_path / name).stat().st_size > 10_000 for name in paths.values())
     text = "\n".join(walking_section(walking, paths))
     assert "## The walk: stability, pushes, commanded speed" in text
+    assert f"by differences of the walker's step, L = 0.40, 0.45 m, alpha {math.degrees(alpha):g} deg)" in text
     assert f"| left | {pushes[0].limit:.3g} | {pushes[1].limit:.3g} | {plain[0].limit:.3g} |" in text
     assert all(f"]({name})" in text for name in paths.values())
     assert np.isfinite([s.W for s in ramp]).all() and len(ramp) >= 9

@@ -269,6 +269,9 @@ def walking_section(walking: Walking, figures: dict[str, str]) -> list[str]:
     """The section's Markdown lines; ``figures`` maps its captions to paths."""
     steered = [lp.radius for lp in walking.loops if lp.steering is not None]
     plain = [lp.radius for lp in walking.loops if lp.steering is None]
+    lengths = ", ".join(f"{L:.2f}" for L in sorted({lp.step_length for lp in walking.loops}))
+    alphas = sorted({math.degrees(lp.alpha) for lp in walking.loops})
+    alpha_text = f"{alphas[0]:g} to {alphas[-1]:g} deg" if len(alphas) > 1 else f"{alphas[0]:g} deg"
     open_loop = [g.stability.spectral_radius for g in walking.curves if g.stability is not None]
     transitions = [s.transition_seconds for s in walking.ramp if s.transition_seconds > 0]
     top = max(walking.ramp, key=lambda s: s.aimed)
@@ -283,7 +286,7 @@ def walking_section(walking: Walking, figures: dict[str, str]) -> list[str]:
              f"- **Open loop**: spectral radius {min(open_loop):.0f} to {max(open_loop):.0f} over the Fig. 4 gaits "
              "(both modes). **Closed loop**: "
              f"{min(plain):.4f} to {max(plain):.4f} with the plain re-aim, {min(steered):.4f} to {max(steered):.4f} "
-             "with steering (by differences of the walker's step, L = 0.40, 0.45, 0.50 m, alpha 0 to 45 deg).",
+             f"with steering (by differences of the walker's step, L = {lengths} m, alpha {alpha_text}).",
              f"- **Pushes** (a horizontal impulse on the trunk at mid-step of a right-foot step, `biped-gait "
              f"push-study`): recovered if the robot does not fall and, {RECOVERY_STEPS} steps after the pushed one, "
              f"its state at the step's start is within {RECOVERY_TOLERANCE:g} (rad, rad/s) of the orbit's. The "
