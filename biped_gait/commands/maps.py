@@ -22,7 +22,8 @@ def document(maps: WalkingMaps) -> dict:
             "step_lengths": maps.step_lengths, "periods": maps.periods,
             "region": [[CATEGORIES[c] for c in row] for row in maps.region.tolist()],
             "boundary": [{"step_length": length, "min_period": period} for length, period in maps.boundary],
-            "optima_stride": maps.stride, "optima": [{"step_length": o.step_length, "period": o.period, "alpha": o.alpha, "W": o.W,
+            "optima_stride": maps.stride,
+            "optima": [{"step_length": o.step_length, "period": o.period, "alpha": o.alpha, "W": o.W,
                         "other_mode_W": o.other_W, "interior": o.interior} for o in maps.optima]}
 
 

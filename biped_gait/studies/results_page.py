@@ -454,7 +454,8 @@ def render(
                   "is that of a shove of 1e-4 rad/s on every joint at step 10 (below 1: the closed loop is stable):",
                   ""]
         lines += pulse_lines(list(extensions.pulses))
-    lines += _maps_section(extensions.maps, figures)
+    if extensions.maps:
+        lines += _maps_section(extensions.maps, figures)
     if extensions.stability:
         lines += ["", "## Stability of the gaits (beyond the paper)", "",
                   "Floquet multipliers of the Poincare map just after the double support (docs/model.md section 8): "
