@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ..arguments import check_output_folder, request_fields
 from ..core.gait import views
+from ..core.gait.lasting import LastingRequest, LastingSupport
 from ..core.gait.planner import GaitPlanner, GaitRequest
 from .output import check_json, write_json
 
@@ -23,6 +24,9 @@ def run(args: argparse.Namespace) -> int:
         check_output_folder(args.out, "--out", force=True)
     fields = request_fields(args, exclude=("params",))
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
+    lasting = LastingRequest(args.double_support, request.effort) if args.double_support else None
+    if lasting is not None and math.isfinite(request.turn_radius):
+        raise ValueError("--double-support: a lasting double support is planned for straight gaits only")
     planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
         gait = planner.plan_stride(request)
@@ -32,6 +36,13 @@ def run(args: argparse.Namespace) -> int:
         gait = planner.plan(request)
         print(views.summary(gait))
         result, drawn = views.to_dict(gait), gait
+    admissible = gait.admissible
+    if lasting is not None and gait.usable:
+        support = planner.lasting.periodic(gait, lasting)
+        limit = planner.lasting.limit(gait, lasting.effort)
+        print(lasting_summary(support, limit.effort_total, gait.W))
+        result["double_support_phase"] = views.double_support_phase(support, limit.effort_total)
+        admissible = admissible and support.success
     written = [write_json(args.json, result)]
     if args.out is not None:
         from ..studies.figures import plan_figure, save  # matplotlib only when a figure is asked
@@ -41,4 +52,16 @@ def run(args: argparse.Namespace) -> int:
     files = [str(path) for path in written if path is not None]
     if files:
         print("written: " + ", ".join(files))
-    return 0 if gait.admissible else 1
+    return 0 if admissible else 1
+
+
+def lasting_summary(support: LastingSupport, limit_effort: float, paper_effort: float) -> str:
+    """A few lines on a double support that lasts."""
+    if not support.success:
+        return f"double support of {support.duration:g} s: refused: {support.message}"
+    peak = ", ".join(f"{v:.0f}" for v in support.peak_torque)
+    return (f"double support of {support.duration:g} s: E = {support.effort_total:.3f} N m s "
+            f"(impulses {abs(support.i_minus).sum():.2f} + {abs(support.i_plus).sum():.2f}, torques {support.effort_l1:.2f}); "
+            f"E(0+) = {limit_effort:.3f}, W = {paper_effort:.3f} N m s\n"
+            f"  peak torques {peak} N m; friction used {support.friction_used:.3f}; IPOPT {support.iterations} "
+            f"iterations, {support.solve_time_s:.2f} s")

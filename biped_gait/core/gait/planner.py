@@ -18,6 +18,7 @@ import warnings
 from collections.abc import Callable, Iterable
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -43,6 +44,7 @@ from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
+    from .lasting import LastingPlanner
     from .turning_atlas import TurningAtlas
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
@@ -224,6 +226,15 @@ class GaitPlanner:
         except AtlasError as exc:
             self.atlas_notes[mode] = str(exc)
             return None
+
+    @cached_property
+    def lasting(self) -> "LastingPlanner":
+        """The double supports that last d seconds (``core/gait/lasting.py``), on this planner's model
+        and flow; its programs are built when first solved (a few seconds each). Imported here: CasADi
+        takes a quarter of a second to import, which a plan of the paper's gait does not need."""
+        from .lasting import LastingPlanner
+
+        return LastingPlanner(self.model, self.hybrid.exchange, self.flow, self.params.friction)
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
         """The current atlas of these parameters and ``mode`` (loaded when the planner is made,

@@ -187,6 +187,20 @@ def to_dict(gait: Gait, trajectory: bool = True) -> dict:
     return {f.key: clean(f.read(gait)) for f in FIELDS if trajectory or f.key != "trajectory"}
 
 
+def double_support_phase(support, limit_effort: float) -> dict:
+    """A double support that lasts (``lasting.LastingSupport``) as the plan's JSON has it, in the
+    plan's ``double_support_coordinates`` and ``actuated_joints``; ``limit_effort`` E(0+) (N m s)."""
+    return clean({
+        "duration": support.duration, "success": support.success, "message": support.message,
+        "t": support.t, "X": support.x, "Xd": support.xd, "Xdd": support.xdd, "torques": support.torques,
+        "contact_forces": support.contact_forces, "effort_l1": support.effort_l1, "effort_l2": support.effort_l2,
+        "peak_torque": support.peak_torque, "friction_used": support.friction_used, "i_minus": support.i_minus,
+        "i_plus": support.i_plus, "held_impact_impulses": support.held_impact_impulses,
+        "effort_total": support.effort_total, "effort_impulsive_limit": limit_effort,
+        "next_start_velocity": support.next_start_velocity, "iterations": support.iterations,
+        "solve_time_s": support.solve_time_s})
+
+
 def to_json(gait: Gait, trajectory: bool = True) -> str:
     """JSON text of ``to_dict``."""
     return json.dumps(to_dict(gait, trajectory), indent=1)

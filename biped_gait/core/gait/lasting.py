@@ -1,0 +1,551 @@
+"""A double support that lasts d seconds between the paper's two impulses (docs/model.md section 14).
+
+The cycle, after the gait's ballistic single support (its arrival velocity Xd^b at the touchdown
+configuration q_T):
+
+1. I^-: impulsive joint torques, the old stance tip held (paper eqs. 6-7);
+2. the touchdown, a passive impact with both tips held (``closed_chain.impact``'s equations): both
+   tips' impulses press on the ground and lie in their friction pyramids;
+3. d seconds of double support: the closed chain of section 12 under finite torques Gamma(t),
+   both tips fixed, both reactions in their pyramids with non-negative normal force, every
+   |Gamma_j| within the joint table's effort, the joints within their ranges;
+4. I^+: impulsive joint torques at lift-off, the new tip held, the old one leaving with the
+   gait's velocity (paper eq. 10), onto the next step's start Xd^a.
+
+The lift-off configuration is the touchdown's, q_T (project choice): the gait's ballistic single
+support, its BVP and its closure stay the paper's, so the double support is an optimal-control
+problem between two known states, and d = 0 with the old tip leaving at the impact is the
+paper's gait. (The feet-line momentum, which the impulses cannot change, changes over the phase
+by m g times the integral of the centre of mass's distance from the feet line; the closure of the
+single support makes the two ends' momenta equal, so the phase must return it.)
+
+The phase is transcribed by Hermite-Simpson collocation (compressed form) in inverse-dynamics
+form: q, qd, qdd, Gamma and the new tip's reaction at every node and midpoint, the equations of
+motion as equality constraints at each, the new tip's held position and velocity at the nodes;
+the old tip's reaction is the double-support model's root rows. The impulses' equations are linear
+at q_T. The whole is one nonlinear program solved by IPOPT (CasADi's, with MUMPS) with exact
+derivatives from ``core/dynamics/symbolic.py``. The effort minimized is
+
+    E = Sum |I^-| + integral Sum |Gamma_j| dt + Sum |I^+|            (N m s, ``l1``)
+
+or E2 = Sum (I^-)^2 + integral Gamma' Gamma dt + Sum (I^+)^2 (``l2``). With d = 0 the program
+keeps its impulses and the held impact and has no phase between: its optimum is E(0+), the limit
+of E(d) as d -> 0.
+
+Units SI, rad; forces N, impulses N s, joint impulses N m s.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+
+from ..dynamics.symbolic import SymbolicModel
+from ..dynamics.closed_chain import ClosedChain
+from ..dynamics.flow import BallisticFlow
+from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
+from .flow_function import CoupledConstraints, FlowFunction
+
+INTERVALS = 20  # Hermite-Simpson intervals over d: 41 collocation points (nodes and midpoints)
+TOLERANCE = 1e-9  # IPOPT's tolerance on the scaled KKT conditions and on the constraint violation
+PYRAMID_SIDES = 8  # the friction cone's inscribed pyramid, as the impulses' LP (docs/model.md 4.4)
+MAX_ITERATIONS = 3000
+# The unknowns' magnitudes (``_Program.var``); forces and impulses scale with the weight.
+TORQUE = 100.0  # N m
+JOINT_IMPULSE = 10.0  # N m s
+ACCELERATION = 10.0  # rad/s^2
+IMPULSE_TIME = 0.1  # s: a reaction impulse's scale is the weight over this long
+KINDS = ("periodic", "stop", "start", "limit")
+
+
+@dataclass(frozen=True)
+class LastingRequest:
+    """What the double support is asked: its duration (s) and the effort to minimize (``l1`` or
+    ``l2``)."""
+
+    duration: float
+    effort: str = "l1"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.duration) and self.duration >= 0.0):
+            raise ValueError(f"double_support must be a duration >= 0 s, got {self.duration!r}")
+        if self.effort not in ("l1", "l2"):
+            raise ValueError(f"effort must be l1 or l2, got {self.effort!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class Boundary:
+    """The ends of a double support: the gait's touchdown configuration q_T (rad, single-support
+    coordinates), its arrival velocity Xd^b and the next step's start Xd^a (double-support
+    coordinates X, this step's frame), the standing posture on the same two feet (rad; the stop's end,
+    the start's beginning) and the gait's period T (s)."""
+
+    q_t: np.ndarray
+    xd_b: np.ndarray
+    xd_a: np.ndarray
+    q_rest: np.ndarray
+    period: float
+
+
+@dataclass(frozen=True, eq=False)
+class LastingSupport:
+    """A solved (or refused) double support of ``duration`` seconds. Samples at every collocation
+    point (nodes and midpoints, 2 INTERVALS + 1 instants from 0 to d, both included): ``t`` (s),
+    ``x``, ``xd``, ``xdd`` in the double-support coordinates X, ``torques`` (N m, actuated joints),
+    ``contact_forces`` (old and new stance tip, world axes, N, n x 2 x 3). The impulses: ``i_minus``,
+    ``i_plus`` (N m s), ``held_impact_impulses`` (old and new tip, N s, 2 x 3). Efforts (N m s):
+    ``effort_l1`` and ``effort_l2`` of the torques over the phase, ``effort_total`` the minimized
+    E's l1 reading (impulses and torques)."""
+
+    duration: float
+    success: bool
+    message: str
+    t: np.ndarray
+    x: np.ndarray
+    xd: np.ndarray
+    xdd: np.ndarray
+    torques: np.ndarray
+    contact_forces: np.ndarray
+    i_minus: np.ndarray
+    i_plus: np.ndarray
+    held_impact_impulses: np.ndarray
+    effort_l1: float
+    effort_l2: float
+    effort_total: float
+    iterations: int
+    solve_time_s: float
+    next_start_velocity: np.ndarray | None = None  # periodic: the next step's qd(0) (its own coordinates, rad/s)
+    solution: dict | None = None  # the program's unknowns and multipliers, to warm-start a nearby solve
+
+    @property
+    def peak_torque(self) -> np.ndarray:
+        """The largest |Gamma_j| over the phase, per actuated joint (N m)."""
+        return np.abs(self.torques).max(axis=0) if len(self.torques) else np.zeros(self.i_minus.shape)
+
+    @property
+    def friction_used(self) -> float:
+        """The largest |F_xy| / F_z of both tips over the phase and of the held impact's impulses."""
+        forces = np.concatenate([self.contact_forces.reshape(-1, 3), self.held_impact_impulses])
+        return float(max(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else (0.0 if np.hypot(f[0], f[1]) < 1e-9 else math.inf)
+                         for f in forces))
+
+
+class _Program:
+    """A nonlinear program being written: unknowns with bounds, constraints, cost terms."""
+
+    def __init__(self) -> None:
+        self.w, self.lbw, self.ubw, self.names = [], [], [], []
+        self.g, self.lbg, self.ubg, self.cost = [], [], [], []
+        self.scales: list[np.ndarray] = []
+        self.size = 0
+        self.where: dict[str, int] = {}  # the first offset of each unknown's name
+        self.rows: list[str] = []  # what each constraint row is
+
+    def var(self, name: str, size: int, lower=-np.inf, upper=np.inf, scale: float = 1.0):
+        """An unknown of ``size``; the program holds it divided by ``scale``, its magnitude (IPOPT
+        does not scale unknowns: forces of hundreds of N beside angles of a fraction of a rad make
+        its Newton steps ill-conditioned)."""
+        v = ca.SX.sym(name, size)
+        self.where.setdefault(name, self.size)
+        self.size += size
+        self.w.append(v)
+        self.scales.append(np.full(size, scale))
+        self.lbw.append(np.broadcast_to(lower, (size,)).astype(float) / scale)
+        self.ubw.append(np.broadcast_to(upper, (size,)).astype(float) / scale)
+        self.names.append((name, size))
+        return scale * v
+
+    def eq(self, expr, what: str) -> None:
+        self.rows += [what] * expr.shape[0]
+        self.g.append(expr)
+        self.lbg.append(np.zeros(expr.shape[0]))
+        self.ubg.append(np.zeros(expr.shape[0]))
+
+    def le(self, expr, what: str, upper: float = 0.0) -> None:
+        """expr <= upper."""
+        self.rows += [what] * expr.shape[0]
+        self.g.append(expr)
+        self.lbg.append(np.full(expr.shape[0], -np.inf))
+        self.ubg.append(np.full(expr.shape[0], upper))
+
+
+class LastingProgram:
+    """The nonlinear program of a double support of ``intervals`` collocation intervals for the
+    model ``bm`` (built once, solved for any gait and duration: those are its parameters)."""
+
+    def __init__(self, bm: BipedModel, kind: str, intervals: int = INTERVALS, effort: str = "l1",
+                 friction: float = 0.5, exchange=None, flow: BallisticFlow | None = None) -> None:
+        if kind not in KINDS:
+            raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
+        if (kind == "limit") != (intervals == 0):
+            raise ValueError("the limit d -> 0+ has no phase between its impulses (intervals 0), the others some")
+        self.bm, self.kind, self.intervals, self.effort, self.friction = bm, kind, intervals, effort, friction
+        if kind == "periodic" and (exchange is None or flow is None):
+            raise ValueError("a periodic double support needs the leg exchange and the ballistic flow")
+        self.exchange, self.flow = exchange, flow
+        self.sym = SymbolicModel(bm.double_support)
+        self.nq, self.nx, self.na = bm.nq, bm.double_support.nv, len(bm.actuated)
+        self.at = np.asarray(bm.ds_of_single)
+        self.roots = np.setdiff1d(np.arange(self.nx), self.at)
+        self.lateral_free = not bm.params.joints.lateral_hips
+        if not self.lateral_free:
+            raise ValueError(f"{bm.params.name}: a lasting double support is planned for legs of pitch joints only "
+                             "(aoustin2013, aoustin2013-table): with lateral hip joints the new foot's spin row is not "
+                             "written in the program yet")
+        self.rows = [0, 2]  # the new tip's held rows (x, z): section 12
+        self.actuated = np.asarray(bm.actuated)
+        self.weight = bm.total_mass * bm.params.gravity
+        self.impulse_scale = self.weight * IMPULSE_TIME
+        self._build()
+
+    # The model's pieces as CasADi functions --------------------------------------------------------
+    def _embed(self, q):
+        x = ca.SX.zeros(self.nx)
+        x[self.at.tolist()] = q
+        return x
+
+    def _tip(self, x):
+        return self.sym.frame_position(x, SWING_TIP)
+
+    def _build(self) -> None:
+        nq, nx, na, n_int = self.nq, self.nx, self.na, self.intervals
+        at, roots, rows = self.at.tolist(), self.roots.tolist(), self.rows
+        periodic = self.kind == "periodic"
+        arrives, departs = self.kind in ("stop", "limit", "periodic"), self.kind in ("start", "limit", "periodic")
+        xs, vs, a_s = ca.SX.sym("x", nx), ca.SX.sym("v", nx), ca.SX.sym("a", nx)
+        tip = self._tip(xs)
+        self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs),
+                                               ca.jacobian(self.sym.frame_position(xs, STANCE_TIP), xs)])
+        self.f_rnea = ca.Function("rnea", [xs, vs, a_s], [self.sym.rnea(xs, vs, a_s)])
+        self.f_mass = ca.Function("mass", [xs], [ca.jacobian(self.sym.rnea(xs, ca.SX.zeros(nx), a_s), a_s)])
+
+        # Parameters: the gait's touchdown q_T, Xd^b and Xd^a there, the posture at rest, d.
+        p_q, p_rest = ca.SX.sym("q_t", nq), ca.SX.sym("q_rest", nq)
+        p_xb, p_xa = ca.SX.sym("xd_b", nx), ca.SX.sym("xd_a", nx)
+        p_d = ca.SX.sym("d")
+        tip_t, j2_t, j1_t = self.f_tip(self._embed(p_q))
+        d_t = self.f_mass(self._embed(p_q))
+        b = np.zeros((nx, na))
+        b[np.asarray(at)[self.actuated], np.arange(na)] = 1.0
+        b = ca.DM(b)
+        nlp = _Program()
+        mu = self.friction
+        angles = np.arange(PYRAMID_SIDES) * 2 * np.pi / PYRAMID_SIDES
+        pyramid = ca.DM(np.column_stack([np.cos(angles), np.sin(angles),
+                                         np.full(PYRAMID_SIDES, -mu * np.cos(np.pi / PYRAMID_SIDES))])) if math.isfinite(mu) else None
+
+        def press(force, what):  # a reaction that presses, within the floor's pyramid
+            nlp.le(-force[2], f"{what} presses")
+            if pyramid is not None:
+                nlp.le(ca.mtimes(pyramid, force[:3]), f"{what} within the friction pyramid")
+
+        def cost(values, weight, scale):
+            if self.effort == "l1":
+                s = nlp.var("s", na, 0.0, scale=scale)
+                nlp.le(values - s, "effort")
+                nlp.le(-values - s, "effort")
+                nlp.cost.append(weight * ca.sum1(s))
+            else:
+                nlp.cost.append(weight * ca.sumsqr(values))
+
+        outputs = {}
+        if periodic:
+            # The next step's start velocity (its own coordinates) and the ballistic flow's end
+            # [q(T); qd(T)] from the lift-off posture, tied to the flow outside the SX program.
+            qd_next = nlp.var("qd_next", nq)
+            flow_end = nlp.var("flow_end", 2 * nq)
+            nlp.eq(flow_end[:nq] - p_q, "the single support reaches the touchdown posture")
+            p_xb = self._embed(flow_end[nq:])
+            outputs.update(qd_next=qd_next, flow_end=flow_end)
+        if arrives:
+            # I^-: the old tip held (eqs. 6-7), the swing tip coming down onto the ground.
+            xm, im, r1m = nlp.var("xd_minus", nx), nlp.var("i_minus", na, scale=JOINT_IMPULSE), nlp.var("r1_minus", 3, scale=self.impulse_scale)
+            nlp.eq(ca.mtimes(d_t, xm - p_xb) - ca.mtimes(b, im) - ca.mtimes(j1_t.T, r1m), "I^- (eq. 6)")
+            nlp.eq(ca.mtimes(j1_t, xm), "I^- (eq. 7)")
+            press(r1m, "the old tip's reaction to I^-")
+            nlp.le(ca.mtimes(j2_t[2, :], xm), "the swing tip comes down")
+            cost(im, 1.0, JOINT_IMPULSE)
+            # The passive impact, both tips held.
+            xh, p1, p2 = nlp.var("xd_held", nx), nlp.var("p_old", 3, scale=self.impulse_scale), nlp.var("p_new", 3, scale=self.impulse_scale)
+            nlp.eq(ca.mtimes(d_t, xh - xm) - ca.mtimes(j1_t.T, p1) - ca.mtimes(j2_t.T, p2), "the held impact")
+            nlp.eq(ca.mtimes(j1_t, xh), "the held impact: old tip at rest")
+            nlp.eq(ca.mtimes(j2_t[rows, :], xh), "the held impact: new tip at rest")
+            press(p1, "the held impact's old tip impulse")
+            press(p2, "the held impact's new tip impulse")
+            outputs.update(i_minus=im, p_old=p1, p_new=p2)
+        x_end = xh if self.kind == "limit" else None
+        if n_int > 0:
+            points = self._phase(nlp, p_d, p_q if arrives else p_rest, xh[at] if arrives else None,
+                                 None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost)
+            outputs.update({key: ca.horzcat(*[pt[i] for pt in points]).T
+                            for i, key in enumerate(("q", "v", "a", "tau", "f_old", "f_new"))})
+            x_end = self._embed(points[-1][1])
+        if departs:
+            # I^+: the new tip held, onto Xd^a (eq. 10), at the lift-off posture.
+            ip, r2p = nlp.var("i_plus", na, scale=JOINT_IMPULSE), nlp.var("r2_plus", 3, scale=self.impulse_scale)
+            d_l, j2_l, xd_a = d_t, j2_t, p_xa
+            if periodic:
+                q_l = points[-1][0]
+                _, j2_l, _ = self.f_tip(self._embed(q_l))
+                d_l = self.f_mass(self._embed(q_l))
+                qd = ca.mtimes(ca.DM(self.exchange.inverse), qd_next)
+                xd_a = ca.vertcat(-ca.mtimes(j2_l[:, 3:], qd), qd)  # LinearExchange.next_velocity
+                nlp.le(-xd_a[2], "the old tip leaves the ground")
+            nlp.eq(ca.mtimes(d_l, xd_a - x_end) - ca.mtimes(b, ip) - ca.mtimes(j2_l.T, r2p), "I^+ (eq. 10)")
+            press(r2p, "the new tip's reaction to I^+")
+            cost(ip, 1.0, JOINT_IMPULSE)
+            outputs["i_plus"] = ip
+        self.names = nlp.names
+        self.lbw, self.ubw = np.concatenate(nlp.lbw), np.concatenate(nlp.ubw)
+        self.lbg, self.ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
+        self.row_names = nlp.rows
+        self.scale = np.concatenate(nlp.scales)
+        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d)
+        w = ca.vertcat(*nlp.w)
+        problem = {"x": w, "f": sum(nlp.cost), "g": ca.vertcat(*nlp.g), "p": params}
+        self.where = nlp.where
+        if periodic:
+            problem = self._with_flow(problem, nlp)
+        options = {"ipopt.tol": TOLERANCE, "ipopt.constr_viol_tol": TOLERANCE, "ipopt.print_level": 0,
+                   "ipopt.max_iter": MAX_ITERATIONS, "print_time": False, "ipopt.sb": "yes"}
+        if periodic:  # the ballistic flow's second derivatives are not computed
+            options["ipopt.hessian_approximation"] = "limited-memory"
+        self.solver = ca.nlpsol(f"{self.kind}_double_support", "ipopt", problem, options)
+        self.outputs = ca.Function("outputs", [w, params], list(outputs.values()), ["w", "p"], list(outputs))
+
+    def _with_flow(self, problem: dict, nlp: "_Program") -> dict:
+        """The SX program with the ballistic flow's constraint added: the flow's end, unknowns of the
+        program, equals the flow from the lift-off posture exchanged and the next step's start
+        velocity (``flow_function.CoupledConstraints``)."""
+        nq, nw = self.nq, problem["x"].shape[0]
+        inner = ca.Function("inner", [problem["x"], problem["p"]], [problem["g"]])
+        start_map, end_map = np.zeros((2 * nq, nw)), np.zeros((2 * nq, nw))
+        start_map[:nq, nlp.last_node_q:nlp.last_node_q + nq] = self.exchange.matrix
+        start_map[nq:, self.where["qd_next"]:self.where["qd_next"] + nq] = np.eye(nq)
+        end = self.where["flow_end"]
+        end_map[:, end:end + 2 * nq] = np.eye(2 * nq)
+        scale = np.concatenate(nlp.scales)
+        self.flow_function = FlowFunction("ballistic_flow", self.flow, math.nan, nq)
+        self.constraints = CoupledConstraints("constraints", inner, self.flow_function, start_map * scale, end_map * scale)
+        self.row_names = self.row_names + ["the ballistic flow from the lift-off"] * (2 * nq)
+        self.lbg = np.concatenate([self.lbg, np.zeros(2 * nq)])
+        self.ubg = np.concatenate([self.ubg, np.zeros(2 * nq)])
+        w, p = ca.MX.sym("w", nw), ca.MX.sym("p", problem["p"].shape[0])
+        cost = ca.Function("cost", [problem["x"], problem["p"]], [problem["f"]])
+        return {"x": w, "f": cost(w, p), "g": self.constraints(w, p), "p": p}
+
+    def _phase(self, nlp: "_Program", p_d, q_first, v_first, q_last, rest_last: bool, tip_t, b, press, cost) -> list:
+        """The collocation points (q, qd, qdd, Gamma, old and new tip's reactions) over [0, d], nodes
+        and midpoints in time order; the first node at ``q_first`` with velocity ``v_first`` (None: at
+        rest), the last at ``q_last`` (at rest when ``rest_last``)."""
+        nq, na, n_int, rows = self.nq, self.na, self.intervals, self.rows
+        at, roots = self.at.tolist(), self.roots.tolist()
+        effort_limit = np.array([self.bm.coordinates[k].spec.limits.effort for k in self.actuated])
+        lower_q, upper_q = self._ranges()
+        h = p_d / n_int
+        points, previous = [], None
+        for k in range(n_int + 1):
+            nlp.last_node_q = nlp.size
+            q, v, a = nlp.var("q", nq, lower_q, upper_q), nlp.var("v", nq), nlp.var("a", nq, scale=ACCELERATION)
+            tau, f2 = nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight)
+            if k == 0:
+                nlp.eq(q - q_first, "the first posture")
+                nlp.eq(v if v_first is None else v - v_first, "the first velocity")
+                if v_first is None:
+                    nlp.eq(a, "at rest")
+            else:
+                tip_k, j2_k, _ = self.f_tip(self._embed(q))
+                nlp.eq(tip_k[rows] - tip_t[rows], "the new tip held")
+                nlp.eq(ca.mtimes(j2_k[rows, :], self._embed(v)), "the new tip at rest")
+                q0, v0, a0 = previous
+                a_m = nlp.var("a_mid", nq, scale=ACCELERATION)
+                v_m = (v0 + v) / 2 + h / 8 * (a0 - a)
+                nlp.eq(q - q0 - h / 6 * (v0 + 4 * v_m + v), "collocation")
+                nlp.eq(v - v0 - h / 6 * (a0 + 4 * a_m + a), "collocation")
+                points.append([(q0 + q) / 2 + h / 8 * (v0 - v), v_m, a_m, nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE),
+                               nlp.var("f_new_mid", 3, scale=self.weight), 4.0])
+            points.append([q, v, a, tau, f2, 1.0 if k in (0, n_int) else 2.0])
+            previous = (q, v, a)
+        if q_last is not None:
+            nlp.eq(previous[0] - q_last, "the last posture")
+        if rest_last:
+            nlp.eq(previous[1], "at rest")
+            nlp.eq(previous[2], "at rest")
+        out = []
+        for q, v, a, tau, f2, weight in points:
+            x = self._embed(q)
+            _, j2_k, _ = self.f_tip(x)
+            generalized = self.f_rnea(x, self._embed(v), self._embed(a))
+            nlp.eq(generalized[at] - ca.mtimes(j2_k[rows, at].T, f2[rows]) - ca.mtimes(b[at, :], tau), "the closed chain's equations of motion")
+            f1 = generalized[roots] - f2  # the old tip's reaction: the root rows less the new tip's share
+            press(f1, "the old tip's reaction")
+            press(f2, "the new tip's reaction")
+            cost(tau, h / 6 * weight, TORQUE)
+            out.append((q, v, a, tau, f1, f2))
+        return out
+
+    def _ranges(self) -> tuple[np.ndarray, np.ndarray]:
+        """The joint table's ranges on q (rad): a stance-leg coordinate is its joint inverted."""
+        lower, upper = [], []
+        for c in self.bm.coordinates:
+            lim = c.spec.limits
+            lo, hi = (-lim.upper, -lim.lower) if c.inverted else (lim.lower, lim.upper)
+            lower.append(lo)
+            upper.append(hi)
+        return np.array(lower), np.array(upper)
+
+    # Solving ----------------------------------------------------------------------------------------
+    def values(self, solution: dict) -> dict[str, np.ndarray]:
+        """The unknowns of ``solution`` (``LastingSupport.solution``) that occur once, by name."""
+        counts: dict[str, int] = {}
+        for name, _size in self.names:
+            counts[name] = counts.get(name, 0) + 1
+        out, offset = {}, 0
+        x = solution["x"] * self.scale
+        for name, size in self.names:
+            if counts[name] == 1:
+                out[name] = x[offset:offset + size]
+            offset += size
+        return out
+
+    def initial_guess(self, boundary: Boundary, impulsive: dict[str, np.ndarray] | None = None) -> np.ndarray:
+        """The unknowns along the straight line between the phase's two postures at rest, the
+        impulses zero, the weight shared by the feet; or, given the impulsive limit's unknowns
+        (``values`` of the ``limit`` program's solution), its impulses, and the phase at the
+        touchdown posture moving with the held impact's velocity."""
+        w0 = np.zeros(len(self.lbw))
+        offset, node = 0, 0
+        impulsive = impulsive or {}
+        moving = None
+        if "xd_held" in impulsive:  # the closed chain's own motion from the held velocity, torque-free
+            qd = impulsive["xd_held"][self.at]
+            qdd, held = ClosedChain(self.bm, self.exchange).forward(boundary.q_t, qd, np.zeros(self.na))
+            moving = {"v": qd, "a": qdd, "a_mid": qdd, "f_new": [held[0], 0.0, held[1]],
+                      "f_new_mid": [held[0], 0.0, held[1]]}
+        weight = self.bm.total_mass * self.bm.params.gravity
+        first, last = {"stop": (boundary.q_t, boundary.q_rest), "start": (boundary.q_rest, boundary.q_t)}.get(
+            self.kind, (boundary.q_t, boundary.q_t))
+        for name, size in self.names:
+            if name == "q":
+                w0[offset:offset + size] = first + (last - first) * node / max(self.intervals, 1)
+                node += 1
+            elif name in ("f_new", "f_new_mid"):
+                w0[offset:offset + size] = [0.0, 0.0, weight / 2]
+            elif name in ("p_old", "p_new"):
+                w0[offset + 2] = 1.0
+            elif name == "qd_next":
+                w0[offset:offset + size] = self.exchange.velocity(boundary.q_t, boundary.xd_a)
+            elif name == "flow_end":
+                w0[offset:offset + size] = np.concatenate([boundary.q_t, boundary.xd_b[self.at]])
+            if moving is not None and name in moving:
+                w0[offset:offset + size] = moving[name]
+            if name in impulsive:
+                w0[offset:offset + size] = impulsive[name]
+            offset += size
+        return w0 / self.scale
+
+    def solve(self, boundary: Boundary, duration: float, start: dict | None = None,
+              impulsive: dict[str, np.ndarray] | None = None) -> LastingSupport:
+        """The double support of ``duration`` s between the gait's ends; ``start`` a nearby
+        solution's unknowns and multipliers (``LastingSupport.solution``), else ``initial_guess``
+        (with ``impulsive``)."""
+        if self.kind == "periodic":
+            self.flow_function.evaluation.period = boundary.period
+            self.flow_function.evaluation.key = None
+        params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a, [duration]])
+        args = dict(p=params, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg, ubg=self.ubg)
+        if start is None:
+            args["x0"] = self.initial_guess(boundary, impulsive)
+        else:
+            args.update(x0=start["x"], lam_x0=start["lam_x"], lam_g0=start["lam_g"])
+        begin = time.perf_counter()
+        result = self.solver(**args)
+        elapsed = time.perf_counter() - begin
+        stats = self.solver.stats()
+        out = dict(zip(self.outputs.name_out(), (np.array(v) for v in self.outputs(result["x"], params))))
+        solution = {key: np.array(result[key]).ravel() for key in ("x", "lam_x", "lam_g", "g")}
+        return self._support(duration, stats, out, elapsed, solution)
+
+    def _support(self, duration: float, stats: dict, out: dict, elapsed: float, solution: dict) -> LastingSupport:
+        n_points = 2 * self.intervals + 1 if self.intervals > 0 else 0
+        embed = self._embed_array
+        if n_points:
+            t = np.linspace(0.0, duration, n_points)
+            x, xd, xdd = embed(out["q"]), embed(out["v"]), embed(out["a"])
+            tau = out["tau"]
+            forces = np.stack([out["f_old"], out["f_new"]], axis=1)
+            weights = np.array([1.0] + [4.0, 2.0] * (self.intervals - 1) + [4.0, 1.0]) * (duration / self.intervals) / 6
+            l1 = float(weights @ np.abs(tau).sum(axis=1))
+            l2 = float(weights @ (tau ** 2).sum(axis=1))
+        else:
+            t = np.zeros(0)
+            x = xd = xdd = np.zeros((0, self.nx))
+            tau, forces = np.zeros((0, self.na)), np.zeros((0, 2, 3))
+            l1 = l2 = 0.0
+        none = np.zeros(self.na)
+        i_minus, i_plus = out.get("i_minus", none).ravel(), out.get("i_plus", none).ravel()
+        held = np.stack([out["p_old"].ravel(), out["p_new"].ravel()]) if "p_old" in out else np.zeros((2, 3))
+        total = float(np.abs(i_minus).sum() + np.abs(i_plus).sum() + l1)
+        success = bool(stats["success"])
+        message = "solved" if success else (f"no {self.kind} double support of {duration:g} s: IPOPT "
+                                            f"{stats['return_status']}; {self._worst(solution)}")
+        next_start = out["qd_next"].ravel() if "qd_next" in out else None
+        return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held, l1, l2,
+                              total, int(stats["iter_count"]), elapsed, next_start, solution)
+
+    def _worst(self, solution: dict) -> str:
+        """What the last iterate violates most, in the constraints' words and units."""
+        g = np.asarray(solution["g"])
+        excess = np.maximum(self.lbg - g, 0.0) + np.maximum(g - self.ubg, 0.0)
+        worst = int(np.argmax(excess))
+        return f"its last iterate misses '{self.row_names[worst]}' by {excess[worst]:.3g}"
+
+    def _embed_array(self, q: np.ndarray) -> np.ndarray:
+        out = np.zeros((q.shape[0], self.nx))
+        out[:, self.at] = q
+        return out
+
+
+class LastingPlanner:
+    """The double supports that last for one model: the programs (``LastingProgram``, built once
+    each, a few seconds), solved for a planned gait (``core/gait/planner.py``'s ``Gait``)."""
+
+    def __init__(self, bm: BipedModel, exchange, flow: BallisticFlow, friction: float) -> None:
+        self.bm, self.exchange, self.flow, self.friction = bm, exchange, flow, friction
+        self.programs: dict[tuple[str, str], LastingProgram] = {}
+
+    def program(self, kind: str, effort: str) -> LastingProgram:
+        key = (kind, effort)
+        if key not in self.programs:
+            self.programs[key] = LastingProgram(self.bm, kind, 0 if kind == "limit" else INTERVALS, effort,
+                                                self.friction, self.exchange, self.flow)
+        return self.programs[key]
+
+    def boundary(self, gait, q_rest: np.ndarray | None = None) -> Boundary:
+        """The ends of ``gait``'s double support (a solved, straight gait)."""
+        ds = gait.double_support
+        if ds is None or not gait.step.converged:
+            raise ValueError(f"no double support for a gait that was not solved: {gait.message}")
+        q_t = gait.step.q_target
+        return Boundary(q_t, ds.xd_b, ds.xd_a, q_t if q_rest is None else q_rest, gait.problem.period)
+
+    def limit(self, gait, effort: str = "l1") -> LastingSupport:
+        """The limit d -> 0+: I^-, the held impact pressing, I^+ (its effort is E(0+))."""
+        return self.program("limit", effort).solve(self.boundary(gait), 0.0)
+
+    def periodic(self, gait, request: LastingRequest, start: dict | None = None) -> LastingSupport:
+        """The periodic cycle of ``gait``'s single support (from the lift-off posture the phase
+        ends in) and a double support of ``request.duration`` s; ``start`` a nearby solution."""
+        if request.duration == 0.0:
+            return self.limit(gait, request.effort)
+        program = self.program("periodic", request.effort)
+        boundary = self.boundary(gait)
+        if start is None:
+            limit = self.program("limit", request.effort).solve(boundary, 0.0)
+            return program.solve(boundary, request.duration, None, self.program("limit", request.effort).values(limit.solution))
+        return program.solve(boundary, request.duration, start)
