@@ -60,7 +60,12 @@ TORQUE = 100.0  # N m
 JOINT_IMPULSE = 10.0  # N m s
 ACCELERATION = 10.0  # rad/s^2
 IMPULSE_TIME = 0.1  # s: a reaction impulse's scale is the weight over this long
+NEGLIGIBLE = 1e-7  # of a reaction's scale: below it a reaction is the solver's tolerance, not a force
 KINDS = ("periodic", "stop", "start", "limit")
+# IPOPT started at a nearby solution with its multipliers: the barrier parameter from near its end,
+# the point pushed off its bounds by as little as the multipliers are.
+WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipopt.warm_start_bound_push": 1e-9,
+              "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9}
 
 
 @dataclass(frozen=True)
@@ -129,10 +134,17 @@ class LastingSupport:
 
     @property
     def friction_used(self) -> float:
-        """The largest |F_xy| / F_z of both tips over the phase and of the held impact's impulses."""
-        forces = np.concatenate([self.contact_forces.reshape(-1, 3), self.held_impact_impulses])
-        return float(max(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else (0.0 if np.hypot(f[0], f[1]) < 1e-9 else math.inf)
-                         for f in forces))
+        """The largest |F_xy| / F_z of both tips over the phase and of the held impact's impulses;
+        a reaction within the solver's tolerance of zero (``NEGLIGIBLE`` of the weight, or of its
+        impulse over 0.1 s) needs none: its direction is rounding's."""
+        weight = float(np.max(np.abs(self.contact_forces[..., 2]), initial=0.0)) or 1.0
+        ratios = [0.0]
+        for forces, floor in ((self.contact_forces.reshape(-1, 3), NEGLIGIBLE * weight),
+                              (self.held_impact_impulses, NEGLIGIBLE * weight * IMPULSE_TIME)):
+            for f in forces:
+                if np.linalg.norm(f) > floor:
+                    ratios.append(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else math.inf)
+        return float(max(ratios))
 
 
 class _Program:
@@ -313,9 +325,13 @@ class LastingProgram:
             problem = self._with_flow(problem, nlp)
         options = {"ipopt.tol": TOLERANCE, "ipopt.constr_viol_tol": TOLERANCE, "ipopt.print_level": 0,
                    "ipopt.max_iter": MAX_ITERATIONS, "print_time": False, "ipopt.sb": "yes"}
-        if periodic:  # the ballistic flow's second derivatives are not computed
+        if periodic:
+            # The ballistic flow's second derivatives are not computed. Measured: the exact Hessian
+            # of the rest with the flow's curvature left out stalls (3000 iterations at d = 0.1 s
+            # at the default gait), where the limited-memory approximation converges (about 200).
             options["ipopt.hessian_approximation"] = "limited-memory"
         self.solver = ca.nlpsol(f"{self.kind}_double_support", "ipopt", problem, options)
+        self._warm = (problem, {**options, **WARM_START})
         self.outputs = ca.Function("outputs", [w, params], list(outputs.values()), ["w", "p"], list(outputs))
 
     def _with_flow(self, problem: dict, nlp: "_Program") -> dict:
@@ -389,6 +405,13 @@ class LastingProgram:
             out.append((q, v, a, tau, f1, f2))
         return out
 
+    @cached_property
+    def warm_solver(self) -> ca.Function:
+        """The program's solver for a start at a nearby solution (``WARM_START``), made when first
+        needed."""
+        problem, options = self._warm
+        return ca.nlpsol(f"{self.kind}_double_support_warm", "ipopt", problem, options)
+
     def _ranges(self) -> tuple[np.ndarray, np.ndarray]:
         """The joint table's ranges on q (rad): a stance-leg coordinate is its joint inverted."""
         lower, upper = [], []
@@ -459,14 +482,16 @@ class LastingProgram:
             self.flow_function.evaluation.key = None
         params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a, [duration]])
         args = dict(p=params, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg, ubg=self.ubg)
+        solver = self.solver
         if start is None:
             args["x0"] = self.initial_guess(boundary, impulsive)
         else:
             args.update(x0=start["x"], lam_x0=start["lam_x"], lam_g0=start["lam_g"])
+            solver = self.warm_solver
         begin = time.perf_counter()
-        result = self.solver(**args)
+        result = solver(**args)
         elapsed = time.perf_counter() - begin
-        stats = self.solver.stats()
+        stats = solver.stats()
         out = dict(zip(self.outputs.name_out(), (np.array(v) for v in self.outputs(result["x"], params))))
         solution = {key: np.array(result[key]).ravel() for key in ("x", "lam_x", "lam_g", "g")}
         return self._support(duration, stats, out, elapsed, solution)
