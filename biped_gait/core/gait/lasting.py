@@ -291,6 +291,13 @@ class LastingProgram:
             press(p2, "the held impact's new tip impulse")
             outputs.update(i_minus=im, p_old=p1, p_new=p2)
         x_end = xh if self.kind == "limit" else None
+        if self.kind == "limit":
+            # The held velocity must be one the closed chain can carry for an instant: some torques
+            # within their limits keep both reactions pressing (what any d > 0 asks from its start).
+            effort_limit = np.array([self.bm.coordinates[k].spec.limits.effort for k in self.actuated])
+            self._held(nlp, p_q, xh[at], nlp.var("a", nq, scale=ACCELERATION),
+                       nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight),
+                       b, press)
         if n_int > 0:
             points = self._phase(nlp, p_d, p_q if arrives else p_rest, xh[at] if arrives else None,
                                  None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost)
@@ -394,16 +401,23 @@ class LastingProgram:
             nlp.eq(previous[2], "at rest")
         out = []
         for q, v, a, tau, f2, weight in points:
-            x = self._embed(q)
-            _, j2_k, _ = self.f_tip(x)
-            generalized = self.f_rnea(x, self._embed(v), self._embed(a))
-            nlp.eq(generalized[at] - ca.mtimes(j2_k[rows, at].T, f2[rows]) - ca.mtimes(b[at, :], tau), "the closed chain's equations of motion")
-            f1 = generalized[roots] - f2  # the old tip's reaction: the root rows less the new tip's share
-            press(f1, "the old tip's reaction")
-            press(f2, "the new tip's reaction")
+            out.append((q, v, a, tau, self._held(nlp, q, v, a, tau, f2, b, press), f2))
             cost(tau, h / 6 * weight, TORQUE)
-            out.append((q, v, a, tau, f1, f2))
         return out
+
+    def _held(self, nlp: "_Program", q, v, a, tau, f2, b, press):
+        """The closed chain's equations of motion at one instant, both reactions pressing within the
+        floor's pyramid; the old tip's reaction (the root rows less the new tip's share)."""
+        at, roots, rows = self.at.tolist(), self.roots.tolist(), self.rows
+        x = self._embed(q)
+        _, j2_k, _ = self.f_tip(x)
+        generalized = self.f_rnea(x, self._embed(v), self._embed(a))
+        nlp.eq(generalized[at] - ca.mtimes(j2_k[rows, at].T, f2[rows]) - ca.mtimes(b[at, :], tau),
+               "the closed chain's equations of motion")
+        f1 = generalized[roots] - f2
+        press(f1, "the old tip's reaction")
+        press(f2, "the new tip's reaction")
+        return f1
 
     @cached_property
     def warm_solver(self) -> ca.Function:
