@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Create the project's environment in .venv with the pinned dependencies and the biped_gait
-# package installed in editable mode, and builds the ROS 2 interfaces of msg_defs/ into it (the
-# venv is the ROS prefix). Idempotent: a second run only checks.
+# Create the project's environment in a venv (.venv by default) with the pinned dependencies and
+# the biped_gait package installed in editable mode, and builds the ROS 2 interfaces of msg_defs/
+# into it (the venv is the ROS prefix). Idempotent: a second run only checks.
 #
 # Python 3.11 or 3.12: PYTHON names the interpreter that makes the venv (default python3), VENV
 # the venv (default .venv), e.g. `PYTHON=python3.12 VENV=.venv-3.12 bash tools/setup.sh`; the
@@ -15,7 +15,8 @@
 # build/<venv>/<step>.log, shown if it fails. Figures: docs/development.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-export VENV=${VENV:-.venv}
+VENV=${VENV:-.venv}
+export VENV=${VENV%/}
 version() {  # the Python version of an interpreter, e.g. 3.12
   "$1" -c 'import sys; print("%d.%d" % sys.version_info[:2])'
 }
