@@ -8,7 +8,9 @@ Errors in the input print one line on stderr and exit with status 2, output path
 (checked before any work: a folder that cannot be written, a sweep folder holding an earlier
 run without ``--force``); a gait that does not converge or is not admissible is printed with
 its reasons and exits with status 1, and so does a write that fails at the end (one line). An
-interrupted verb (Ctrl-C) keeps what it can (a sweep its gaits) and exits with status 130.
+interrupted verb (Ctrl-C) keeps what it can (a sweep its gaits) and exits with status 130. A
+closed standard output (``| head -3``) is no error: what is printed after is dropped, quietly,
+and the verb goes on (its files written).
 Warnings (a parameter file without a current atlas, say) are one line each.
 """
 
@@ -21,6 +23,7 @@ import warnings
 
 from .arguments import STDOUT
 from .cli_parser import PROG, build_parser
+from .standard_output import QuietStdout
 
 INTERRUPTED = 130  # exit status after Ctrl-C, as shells report it
 
@@ -32,7 +35,15 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``biped-gait``; returns the process exit status."""
-    argv = sys.argv[1:] if argv is None else argv
+    stdout = QuietStdout(sys.stdout)
+    try:
+        with contextlib.redirect_stdout(stdout):
+            return _main(sys.argv[1:] if argv is None else argv)
+    finally:
+        stdout.flush()  # what is left in the buffer, where a closed reader is no error
+
+
+def _main(argv: list[str]) -> int:
     try:
         args = build_parser(argv[0] if argv else None).parse_args(argv)
     except SystemExit as exc:  # --help (0), or bad usage (2, its one line printed)

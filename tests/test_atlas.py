@@ -16,7 +16,8 @@ import pytest
 from biped_gait.core.gait.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path
 from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait.continuation import continue_to
-from biped_gait.core.gait.fingerprint import code_fingerprint
+from biped_gait.core.gait.fingerprint import code_fingerprint, model_fingerprint
+from biped_gait.core.gait.turning_atlas import TurningAtlas, turning_atlas_path
 from biped_gait.core.model.params import load_params, shipped_param_names
 from biped_gait.core.gait.planner import SEED, GaitPlanner, GaitRequest
 from biped_gait.studies.atlas_build import build_atlas
@@ -77,9 +78,14 @@ def test_a_refusal_says_why_and_where_admissible_gaits_are(planner):
 
 @pytest.mark.parametrize("name", shipped_param_names())
 def test_the_shipped_atlases_are_current(name):
+    """By their model fingerprint, which is the same on every Python version (not only by the
+    bytes of the code: its comments may change), the turning atlases too."""
     params = load_params(name)
     for mode in GaitMode:
         atlas = Atlas.load(atlas_path(params, mode), params, name)
+        assert atlas.fingerprint == model_fingerprint(params)
+        if params.joints.lateral_hips:
+            TurningAtlas.load(turning_atlas_path(params, mode), params, name)
         counts = atlas.counts()
         assert counts["admissible"] > 0.35 * sum(counts.values()), counts  # T >= ~0.42 s at every L, mostly
         seed = tuple(int(np.argmin(np.abs(axis - x))) for axis, x in zip(atlas.grid.axes, (0.45, 0.45, math.radians(25.0))))
@@ -87,6 +93,12 @@ def test_the_shipped_atlases_are_current(name):
         assert atlas.grid.step_lengths[0] <= 0.25 and atlas.grid.step_lengths[-1] >= 0.65
         assert atlas.grid.periods[0] <= 0.30 and atlas.grid.periods[-1] >= 0.65
         assert atlas.grid.alphas[0] == 0.0 and math.degrees(atlas.grid.alphas[-1]) >= 45.0 - 1e-9
+
+
+def test_atlas_check_finds_every_shipped_atlas_current():
+    proc = run("atlas", "check")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("every shipped atlas is current ("), proc.stdout
 
 
 @pytest.fixture(scope="module")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -28,6 +29,26 @@ def test_plan_defaults_prints_a_converged_admissible_gait(tmp_path):
     assert "W = " in proc.stdout and "theta = " in proc.stdout
     data = json.loads(out.read_text())
     assert data["converged"] and data["admissible"] and data["W"] > 0
+
+
+@pytest.mark.parametrize("unbuffered", ["1", ""])
+@pytest.mark.parametrize("args", [["plan", "--out", "X"], ["plan", "--json", "-"]])
+def test_a_closed_standard_output_is_no_error(tmp_path, args, unbuffered):
+    """``plan --out X | head -3`` as a reader that is gone before the first line (and each line
+    written at once, or at the end): nothing is said of the pipe, the plan's files are written
+    and its exit status is its own, as with a Unix tool whose reader stopped reading."""
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        proc = subprocess.run([ENTRY, *args], stdout=write, stderr=subprocess.PIPE, text=True, timeout=120,
+                              cwd=tmp_path, env={**os.environ, "PYTHONUNBUFFERED": unbuffered})
+    finally:
+        os.close(write)
+    assert proc.returncode == 0, proc.stderr
+    assert not any(word in proc.stderr for word in ("biped-gait: error", "Broken pipe", "Exception", "Traceback")), proc.stderr
+    if "--out" in args:
+        assert proc.stderr == ""
+        assert (tmp_path / "X" / "plan.json").is_file() and (tmp_path / "X" / "plan.png").is_file()
 
 
 def test_plan_and_help_import_only_what_they_use():

@@ -1,22 +1,28 @@
 #!/usr/bin/env bash
 # Build the interface packages of msg_defs/ (ament_cmake, rosidl: tf2_msgs and
-# biped_gait_interfaces) against the ROS 2 Jazzy wheels and install them into the venv, which is
-# the ROS prefix. Needs cmake and a C/C++ compiler.
+# biped_gait_interfaces) against the ROS 2 Jazzy wheels and install them into the venv ($VENV,
+# default .venv), which is the ROS prefix. Needs cmake and a C/C++ compiler.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-VENV=$(pwd)/.venv
+VENV=$(realpath "${VENV:-.venv}")
 PY=$VENV/bin/python
-# The wheels' exported CMake files name the wheel builder's include directories; point them
-# at this interpreter's (msg_defs/README.md).
+# The wheels' exported CMake files name the wheel builder's include directories (its Python's,
+# e.g. /opt/python/cp312-cp312/include/python3.12, and NumPy's); point them at this
+# interpreter's, whatever its version (msg_defs/README.md). None may be left.
 py_include=$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')
 np_include=$("$PY" -c 'import numpy; print(numpy.get_include())')
-{ grep -rl --include='*.cmake' '/opt/python/cp311-cp311/' "$VENV/share" 2>/dev/null || true; } | while read -r f; do
-  sed -i -e "s|/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include|$np_include|g" \
-         -e "s|/opt/python/cp311-cp311/include/python3.11|$py_include|g" "$f"
+builder='/opt/python/cp3[0-9]+-cp3[0-9]+'
+{ grep -rlE --include='*.cmake' "$builder/" "$VENV/share" 2>/dev/null || true; } | while read -r f; do
+  sed -i -E -e "s|$builder/lib/python3\.[0-9]+/site-packages/numpy/_?core/include|$np_include|g" \
+            -e "s|$builder/include/python3\.[0-9]+|$py_include|g" "$f"
 done
+if grep -rE --include='*.cmake' "$builder/" "$VENV/share" 2>/dev/null; then
+  echo "tools/build_interfaces.sh: the wheels' CMake files name other paths of their builder (above)" >&2
+  exit 1
+fi
 export AMENT_PREFIX_PATH=$VENV
-build() {  # one package: configure, build, install (logs under build/<package>/)
-  local pkg=$1 build=build/$1
+build() {  # one package: configure, build, install (logs under build/<venv>/<package>/)
+  local pkg=$1 build=build/${VENV##*/}/$1
   mkdir -p "$build"
   cmake -S "msg_defs/$pkg" -B "$build" -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_PREFIX_PATH="$VENV" -DCMAKE_INSTALL_PREFIX="$VENV" -DPython3_EXECUTABLE="$PY" \

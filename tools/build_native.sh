@@ -2,7 +2,7 @@
 # Build the compiled twins of the core, biped_gait/core/dynamics/_flow_native (the RK8 flow,
 # biped_gait/core/dynamics/native/flow.cpp) and biped_gait/core/dynamics/_samples_native (many states evaluated at
 # once, biped_gait/core/dynamics/native/samples.cpp), against the Pinocchio, Eigen and Boost headers and
-# libraries of the pinned cmeel wheels in .venv. Arguments: the sources to build (default: both).
+# libraries of the pinned cmeel wheels in the venv ($VENV, default .venv). Arguments: the sources to build (default: both).
 #
 # The sources are compiled at once, one g++ each (about 2 GB of memory each). Their calls take
 # the argument types of the instantiations libpinocchio_default ships (declared extern by
@@ -12,7 +12,7 @@
 # each module is checked by loading it alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PY=.venv/bin/python
+PY=${VENV:-.venv}/bin/python
 prefix=$("$PY" -c 'import sysconfig, os; print(os.path.join(sysconfig.get_paths()["purelib"], "cmeel.prefix"))')
 suffix=$("$PY" -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
 py_include=$("$PY" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')

@@ -5,8 +5,9 @@
 # recorded under bags/, then analysed (summary and plots under the recording's analysis/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export VENV=${VENV:-.venv}  # the venv, and PYTHON the interpreter that makes it (tools/setup.sh)
 bash tools/setup.sh
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-42}
-.venv/bin/biped-gait plan --json bags/default_gait.json
-.venv/bin/biped-gait-launch --config config/demo.yaml --analyze
+"$VENV"/bin/biped-gait plan --json bags/default_gait.json
+"$VENV"/bin/biped-gait-launch --config config/demo.yaml --analyze

@@ -7,15 +7,16 @@
 # (output shown) does.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+export VENV=${VENV:-.venv}  # the venv, and PYTHON the interpreter that makes it (tools/setup.sh)
 bash tools/setup.sh
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 # Fast DDS's shared-memory ports and segments of nodes that were killed (the fault tests kill
 # some) stay in /dev/shm; after many runs on one machine, a new node could be left unmatched by
 # an old client. Fast DDS's own tool removes only those whose owner is gone (their lock is free),
 # so other sessions' nodes keep theirs.
-.venv/bin/fastdds shm clean > /dev/null 2>&1 || true
+"$VENV"/bin/fastdds shm clean > /dev/null 2>&1 || true
 parallel=(-n auto --dist loadscope)
 for arg in "$@"; do
   case $arg in -s | --capture=no | -n | -n* | --numprocesses*) parallel=() ;; esac
 done
-exec .venv/bin/python -m pytest -q "${parallel[@]}" "$@"
+exec "$VENV"/bin/python -m pytest -q "${parallel[@]}" "$@"

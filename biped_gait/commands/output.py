@@ -10,6 +10,7 @@ from pathlib import Path
 
 from ..arguments import STDOUT, check_output_file
 from ..core.gait.views import clean
+from ..standard_output import drop_standard_output
 
 
 def check_json(target: str | None) -> None:
@@ -30,8 +31,11 @@ def write_json(target: str | None, document: object) -> Path | None:
         return None
     text = json_text(document) + "\n"
     if target == STDOUT:
-        sys.__stdout__.write(text)
-        sys.__stdout__.flush()
+        try:
+            sys.__stdout__.write(text)
+            sys.__stdout__.flush()
+        except BrokenPipeError:
+            drop_standard_output(sys.__stdout__)
         return None
     path = Path(target)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -49,3 +53,4 @@ def write_model(text: str, out: Path | None) -> int:
     else:
         sys.stdout.write(text)
     return 0
+

@@ -31,7 +31,8 @@ STEP_LENGTHS = np.round(np.arange(0.35, 0.55 + 1e-9, 0.05), 6)  # m
 PERIODS = np.round(np.arange(0.40, 0.50 + 1e-9, 0.05), 6)  # s
 ALPHAS = np.radians(np.arange(0.0, 30.0 + 1e-9, 10.0))  # rad
 CURVATURES = np.round(np.arange(0.0, 1.0 + 1e-9, 0.1), 6)  # 1/m: R down to 1 m
-TURNING_CODE = ("gait/turning.py", "gait/stride.py", "model/rotations.py")
+# The turning code beyond the model code (with every core module it imports: tests/test_fingerprint.py).
+TURNING_CODE = ("gait/turning.py", "gait/stride.py")
 # Arrays of a node (grid shape + the trailing shape; "nq" the model's coordinates).
 NODE_ARRAYS = {
     "status": ((), np.uint8), "qd_a": ((2, "nq"), np.float64), "theta": ((2,), np.float64),
@@ -41,8 +42,8 @@ NODE_ARRAYS = {
 
 
 def turning_fingerprint(params: BipedParams) -> str:
-    """SHA-256 of ``model_fingerprint(params)`` and the turning code (``TURNING_CODE``, without
-    docstrings)."""
+    """SHA-256 of ``model_fingerprint(params)`` and the turning code (``TURNING_CODE``, by its
+    tokens)."""
     return code_digest(model_fingerprint(params), TURNING_CODE)
 
 
