@@ -4,7 +4,10 @@ Pinocchio and the planner's own flow, independently of the program's symbols."""
 
 from __future__ import annotations
 
+import json
 import math
+import subprocess
+import sys
 
 import casadi as ca
 import numpy as np
@@ -12,6 +15,7 @@ import pinocchio as pin
 import pytest
 
 from biped_gait.core.dynamics.symbolic import SymbolicModel
+from biped_gait.core.gait import views
 from biped_gait.core.gait.lasting import LastingRequest
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.model.biped import SWING_TIP, BipedModel
@@ -128,3 +132,26 @@ def test_a_refused_double_support_says_why(planner, gait):
         hips.lasting.program("periodic", "l1")
     with pytest.raises(ValueError, match="duration >= 0"):
         LastingRequest(-0.1)
+
+
+def test_the_plan_json_carries_the_phase(cycle):
+    """The plan's ``double_support_phase`` (views.double_support_phase): the samples in the
+    double-support coordinates, both tips' forces, the efforts."""
+    phase = views.double_support_phase(cycle, 50.486)
+    n = len(phase["t"])
+    assert n >= 21 and phase["t"][0] == 0.0
+    assert np.shape(phase["X"]) == np.shape(phase["Xd"]) == np.shape(phase["Xdd"]) == (n, 12)
+    assert np.shape(phase["torques"]) == (n, 7) and np.shape(phase["contact_forces"]) == (n, 2, 3)
+    assert np.shape(phase["held_impact_impulses"]) == (2, 3)
+    assert phase["effort_total"] == pytest.approx(sum(map(abs, phase["i_minus"])) + sum(map(abs, phase["i_plus"]))
+                                                  + phase["effort_l1"])
+    assert phase["effort_impulsive_limit"] == 50.486
+    json.dumps(phase, allow_nan=False)
+
+
+@pytest.mark.parametrize("value", ["-0.1", "nan", "inf"])
+def test_a_bad_duration_is_one_line_and_exit_2(value):
+    proc = subprocess.run([sys.executable, "-m", "biped_gait.cli", "plan", "--double-support", value],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().count("\n") == 0 and "double_support must be a duration >= 0 s" in proc.stderr
