@@ -21,7 +21,7 @@ from pathlib import Path
 from ..core.gait.lasting import LastingRequest
 from ..core.gait.planner import GaitPlanner, GaitRequest
 
-DURATIONS = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3)
+DURATIONS = (0.05, 0.1, 0.15, 0.2, 0.3)
 ALPHAS_DEG = (0.0, 7.5, 15.0, 22.5, 30.0, 37.5, 45.0)
 ALPHA_DURATIONS = (0.1,)
 

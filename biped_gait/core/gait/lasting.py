@@ -54,7 +54,7 @@ from .flow_function import CoupledConstraints, FlowFunction
 INTERVALS = 20  # Hermite-Simpson intervals over d: 41 collocation points (nodes and midpoints)
 TOLERANCE = 1e-9  # IPOPT's tolerance on the scaled KKT conditions and on the constraint violation
 PYRAMID_SIDES = 8  # the friction cone's inscribed pyramid, as the impulses' LP (docs/model.md 4.4)
-MAX_ITERATIONS = 3000
+MAX_ITERATIONS = 1000  # the solves that converge take 200 to 600
 # The unknowns' magnitudes (``_Program.var``); forces and impulses scale with the weight.
 TORQUE = 100.0  # N m
 JOINT_IMPULSE = 10.0  # N m s
