@@ -1,7 +1,7 @@
 """The benchmarks' results kept in the repository: each benchmark that the README quotes writes its
 figures to ``benchmarks/results/<benchmark>.json`` with when, where and on which code it ran (the
 date in UTC, the machine: CPU model, cores, Python, and the commit the benchmark started on,
-``+dirty`` when the working tree had changes). The figures the README and docs quote are the ``quoted`` texts of these files,
+``+dirty`` when the code that runs had changes: ``CODE``). The figures the README and docs quote are the ``quoted`` texts of these files,
 as the benchmark formatted them (``tests/test_readme_figures.py`` checks each quoted figure is
 there); ``figures`` keeps the raw medians (s, or ratios) beside them."""
 
@@ -16,6 +16,8 @@ from pathlib import Path
 
 RESULTS = Path(__file__).resolve().parent / "results"
 ROOT = RESULTS.parent.parent
+CODE = ("biped_gait", "benchmarks", "msg_defs", "setup.py", "setup.cfg", "pyproject.toml", "requirements.txt")
+"""What runs: a change elsewhere (docs, tests) leaves a run's commit clean."""
 
 
 def _cpu() -> str:
@@ -34,7 +36,8 @@ def _commit() -> str:
 
     try:
         head = git("rev-parse", "--short=12", "HEAD")
-        changed = [line for line in git("status", "--porcelain").splitlines() if "benchmarks/results/" not in line]
+        changed = [line for line in git("status", "--porcelain", "--", *CODE).splitlines()
+                   if "benchmarks/results/" not in line]
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
     return head + ("+dirty" if changed else "")
