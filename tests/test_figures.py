@@ -171,3 +171,9 @@ def test_the_optimum_maps_scale_spans_the_interior_optima():
     [fig] = [fig for fig, name in maps_figures(maps).values() if name.startswith("map-optimum")]
     [alphas] = [c for c in fig.axes[0].collections if c.get_array() is not None and len(c.get_array()) == 3]
     assert alphas.norm.vmin == pytest.approx(10.6) and alphas.norm.vmax == pytest.approx(31.4)
+    # where the ends are most tiles (a set whose least W is mostly at alpha = 0), the scale spans all
+    mostly_ends = [dataclasses.replace(o, interior=k == 0) for k, o in enumerate(optima)]
+    [fig] = [fig for fig, name in maps_figures(dataclasses.replace(maps, optima=mostly_ends)).values()
+             if name.startswith("map-optimum")]
+    [alphas] = [c for c in fig.axes[0].collections if c.get_array() is not None and len(c.get_array()) == 3]
+    assert alphas.norm.vmin == pytest.approx(10.6) and alphas.norm.vmax == pytest.approx(45.0)

@@ -271,15 +271,17 @@ def _heading(maps: WalkingMaps) -> str:
 
 def optimum_figure(maps: WalkingMaps) -> Figure:
     """alpha*(L, T) (deg) and W*(L, T) (N m s) of the maps' mode over the admissible region, the
-    tiles without an interior minimum (alpha* at an end of the range) outlined and left out of the
-    colour scales (their values written on them)."""
+    tiles without an interior minimum (alpha* at an end of the range) outlined and, where they are
+    fewer than the others, left out of the alpha* colour scale (their values written on them)."""
     fig, (left, right) = _figure(2)
     fig.set_size_inches(12.0, 5.6)
-    interior = [o.interior for o in maps.optima]  # the scales span the interior optima: an end is an outlier
+    interior = [o.interior for o in maps.optima]
+    # alpha* at an end of the range (0 or 45 deg) is no optimum but the range's bound: where such
+    # tiles are few, the alpha* scale spans the interior ones, which they would flatten
+    scaled = interior if 2 * sum(interior) >= len(interior) else None
     handles = _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima],
-                           "optimal arm amplitude alpha* (deg)", fig, mark_ends=True, scaled=interior)
-    _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True,
-                 scaled=interior)
+                           "optimal arm amplitude alpha* (deg)", fig, mark_ends=True, scaled=scaled)
+    _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True)
     fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2, markerscale=0.5)
     fig.suptitle(f"The optimal arm swing over the admissible region ({maps.optima_nodes}), {_heading(maps)}",
                  fontsize="medium")
