@@ -28,6 +28,7 @@ from biped_gait.core.model.params import load_params, shipped_param_names
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.studies.executors import check_workers
 from bench_study import time_study  # this folder's Fig. 4 timing
+import results
 from yardsticks import ColdSolve, median_s
 
 
@@ -89,6 +90,15 @@ def main() -> None:
     study, _, grid = time_study(workers)
     print(f"Fig. 4 study: {grid.size} gaits on {workers} worker processes: {study:.2f} s wall = "
           f"{study / yardstick:.1f} straightforward cold solves ({1e3 * yardstick:.1f} ms each, this run)")
+
+    results.write("bench_atlas", {
+        "cold solve": f"{1e3 * straightforward:.0f} ms", "plan from the atlas": f"{ms(atlas_times):.1f} ms",
+        "plan from the atlas, in cold solves": f"1/{straightforward / statistics.median(atlas_times):.1f}",
+        "Fig. 4 study, in cold solves": f"{study / yardstick:.1f}"},
+        {"cold_solve_s": straightforward, "atlas_plan_median_s": statistics.median(atlas_times),
+         "atlas_plan_p90_s": float(np.percentile(atlas_times, 90)), "planner_cold_median_s": statistics.median(cold_times),
+         "study_s": study, "study_cold_solve_s": yardstick},
+        {"requests": len(requests), "study gaits": int(grid.size), "workers": workers})
 
     for name in shipped_param_names():
         params = load_params(name)

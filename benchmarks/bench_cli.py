@@ -18,6 +18,7 @@ import sys
 import time
 from pathlib import Path
 
+import results
 from yardsticks import FLOOR_IMPORTS
 
 ENVIRONMENT = {name: value for name, value in os.environ.items() if name != "PYTHONDONTWRITEBYTECODE"}
@@ -48,6 +49,12 @@ def main() -> None:
     print(f"whole processes, median of {args.repeat} runs each, in turn:")
     for name, values in times.items():
         print(f"  {name:34s} {1e3 * statistics.median(values):7.0f} ms   {statistics.median(values) / floor:5.2f} x the floor")
+    helps = [statistics.median(values) / floor for name, values in times.items() if name.endswith("--help")]
+    plan = statistics.median(times["biped-gait plan"])
+    results.write("bench_cli", {"import floor": f"{1e3 * floor:.0f} ms", "biped-gait plan": f"{1e3 * plan:.0f} ms",
+                                "biped-gait plan / import floor": f"{plan / floor:.2f}",
+                                "--help / import floor": f"{min(helps):.2f} to {max(helps):.2f}"},
+                  {name: statistics.median(values) for name, values in times.items()}, {"repeat": args.repeat})
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ import subprocess
 import sys
 import time
 
+import results
 from harness import Timed
 from yardsticks import ColdSolve, median_s
 
@@ -82,6 +83,13 @@ def main() -> None:
           f"the wait for their flow included; beside the double support, their variational flow took {1e3 * flow:5.2f} ms of a second core")
     estimate = statistics.median(t for run in runs for t in run["estimate"])
     print(f"  integration-error estimate: {1e3 * estimate:5.2f} ms of a plan's {1e3 * warm:5.2f} ms ({estimate / warm:.0%})")
+    results.write("bench_plan", {
+        "cold solve": f"{1e3 * yardstick:.0f} ms", "plan from the atlas": f"{1e3 * warm:.1f} ms",
+        "plan from the atlas, in cold solves": f"1/{yardstick / warm:.1f}", "first plan / the others": f"{first / warm:.2f}",
+        "multipliers' share": f"{multipliers / warm:.0%}"},
+        {"cold_solve_s": yardstick, "first_plan_s": first, "same_again_s": again, "other_plans_s": warm,
+         "multipliers_s": multipliers, "estimate_s": estimate},
+        {"processes": args.processes, "plans per process": args.plans, "requests": "L = T = 0.45, alpha 15 to 30 deg"})
 
 
 if __name__ == "__main__":

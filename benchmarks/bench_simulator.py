@@ -44,6 +44,7 @@ from biped_gait.core.walking.walk import Walk  # noqa: E402
 from biped_gait.recording.background import BackgroundRecorder  # noqa: E402
 from biped_gait.recording.writer import McapRecorder  # noqa: E402
 from biped_gait.ros.walk_messages import SampleMessages  # noqa: E402
+import results  # noqa: E402
 from harness import RATE, median_range, simulator_factor  # noqa: E402
 from yardsticks import ColdSolve, at_reference, median_s  # noqa: E402
 
@@ -150,6 +151,12 @@ def main() -> None:
     print("per message (us):")
     for what, cost in costs.items():
         print(f"  {what:34s} {cost:7.2f}")
+    results.write("bench_simulator", {
+        "node, recording": f"{median(recorded):.1f}", "walker alone": f"{median(walker):.1f}",
+        "node, recording / walker alone": f"{median(recorded) / median(walker):.2f}",
+        "node, recording, at the reference speed": f"{at_reference(median(recorded), cold):.1f}"},
+        {"recorded": recorded, "unrecorded": unrecorded, "walker": walker, "encoded": encoded, "cold_solve_s": cold},
+        {"rate (Hz)": round(RATE), "steps": args.steps, "runs": args.repeat})
 
 
 if __name__ == "__main__":

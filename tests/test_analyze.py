@@ -17,7 +17,12 @@ from pathlib import Path
 
 import yaml
 
+from matplotlib.figure import Figure
+
 from biped_gait.analysis.cli import main
+from biped_gait.analysis.plots import _joint_figure
+from biped_gait.analysis.summaries import read_walk
+from biped_gait.recording.reader import open_bag
 from biped_gait.ros.client import ClientSide, plan_request
 from biped_gait_interfaces.srv import PlanGait
 
@@ -59,7 +64,14 @@ def test_walk_summary_holds_what_the_recording_holds(recordings, tmp_path, capsy
     walk, _ = recordings
     summary, printed = analyzed(walk, tmp_path, capsys)
     messages = read_bag(walk)
-    start = min(stamp for topic in messages.values() for stamp, _ in topic)
+    first = min(stamp for topic in messages.values() for stamp, _ in topic)  # the recording's start
+    start = min(messages[topic][0][0] for topic in ("/joint_states", "/angular_momentum"))  # the walk's: its first sample
+    assert summary["walk_start"] == pytest.approx((start - first) * 1e-9, abs=1e-9)  # 0 here: nothing came before it
+    walk_read = read_walk(open_bag(walk))  # the plots' time axis: from the walk's first sample, so labelled
+    assert walk_read.joint_time[0] == 0.0 and min(walk_read.momentum_time) >= 0.0
+    figure = Figure()
+    _joint_figure(figure, walk_read)
+    assert figure.axes[1].get_xlabel() == "time from the walk's start, its first sample (s)"
     events = [(stamp, e) for stamp, e in messages["/gait_events"]]
     touchdowns = [(stamp, e) for stamp, e in events if e.kind == 0]
     assert len(touchdowns) == STEPS and summary["walk"]["steps"] == STEPS

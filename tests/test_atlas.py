@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import zipfile
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 
-from biped_gait.core.gait.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path
+from biped_gait.core.gait.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path, period_runs
 from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait.continuation import continue_to
 from biped_gait.core.gait.fingerprint import code_fingerprint, model_fingerprint
@@ -69,11 +70,40 @@ def test_the_users_examples_are_admissible_human_like_gaits():
     assert proc.returncode == 0 and "an interior minimum of W" in proc.stdout, proc.stdout + proc.stderr
 
 
+def _runs(hint: str) -> list[tuple[float, float]]:
+    """The period intervals (s) of a hint "... T in [a, b] or [c, d] s at ..."."""
+    return [(float(a), float(b)) for a, b in re.findall(r"\[([0-9.]+), ([0-9.]+)\]", hint.split(" s at ")[0])]
+
+
 def test_a_refusal_says_why_and_where_admissible_gaits_are(planner):
     gait = planner.plan(GaitRequest(0.45, 0.35, math.radians(23.5)))
     assert not gait.admissible and "swing knee bends backwards" in gait.reasons[0]
     assert gait.hint.startswith("nearest admissible (atlas grid): T in [")
     assert gait.found in ("atlas", "continuation")
+    assert _runs(gait.hint) and not any(a <= 0.35 <= b for a, b in _runs(gait.hint))
+
+
+def test_period_runs_never_hold_the_refused_period():
+    periods = np.round(np.arange(0.30, 0.651, 0.025), 3)
+    assert period_runs(periods, periods >= 0.3, 0.45) == "T in [0.300, 0.425] or [0.475, 0.650] s"
+    assert period_runs(periods, periods >= 0.3, 0.46) == "T in [0.300, 0.450] or [0.475, 0.650] s"
+    assert period_runs(periods, periods > 0.5, 0.35) == "T in [0.525, 0.650] s"
+    assert period_runs(periods, periods < 0, 0.35) == ""
+
+
+def test_a_refusal_beyond_the_atlas_hints_at_its_own_fields(hips):
+    """The README's step width 0.3 m at T = 0.45 s is refused; the atlas (built at the hips'
+    spacing) cannot say where gaits are at that width: the hint's periods are solved at it, the
+    request's L and alpha, and do not hold the refused T; its ends plan admissible as asked."""
+    request = GaitRequest(0.45, 0.45, math.radians(20.0), step_width=0.3)
+    gait = hips.plan(request)
+    assert not gait.admissible
+    assert "step width 0.300 m" in gait.hint and "L = 0.450 m, alpha = 20 deg" in gait.hint, gait.hint
+    runs = _runs(gait.hint)
+    assert runs and not any(a <= 0.45 <= b for a, b in runs), gait.hint
+    for a, b in runs:
+        for period in (a, b):
+            assert hips.plan(dataclasses.replace(request, period=period)).admissible, (period, gait.hint)
 
 
 @pytest.mark.parametrize("name", shipped_param_names())

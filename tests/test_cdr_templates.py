@@ -47,7 +47,8 @@ def test_a_step_of_messages_decodes_to_the_messages_built_field_by_field(step):
         links = np.concatenate([world.link_translations[k], world.link_quaternions[k]], axis=1).ravel()
         expected = {
             topics.JOINT_STATES: joint_state_msg(world.joint_names, np.concatenate([world.joint_positions[k],
-                                                                            world.joint_velocities[k]]), ints),
+                                                                            world.joint_velocities[k],
+                                                                            world.joint_efforts[k]]), ints),
             topics.ODOM: odometry_msg(np.array([*pelvis, *world.pelvis_linear_velocity[k],
                                                 *world.pelvis_angular_velocity[k]]), ints),
             topics.ANGULAR_MOMENTUM: momentum_msg(np.concatenate([world.stance_foot, world.momentum_about_foot[k], world.com[k],

@@ -115,8 +115,12 @@ def test_push_figures_give_units_and_the_stance_foot():
               for alpha in (0.0, 0.4) for name, angle in STUDY_DIRECTIONS.items()]
     polar = polar_figure(limits, "test")
     ax = polar.axes[0]
-    assert any(t.get_text() == "N s" for t in ax.texts) and "right foot in stance" in ax.get_title()
+    polar.canvas.draw()
+    radial = [t.get_text() for t in ax.get_yticklabels() if t.get_text()]
+    assert radial and all(t.endswith(" N s") for t in radial), radial  # the unit on its labels
+    assert "right foot in stance" in ax.get_title()
     assert "stance" in [t.get_text() for t in ax.get_xticklabels()][6]
+    assert all(line.get_linestyle() == "-" for line in ax.lines)  # 8 directions: a curve through them
     fig = limit_vs_alpha_figure(limits, "test")
     fig.canvas.draw()
     labels = [t.get_text() for t in fig.axes[0].get_yticklabels() if t.get_text()]
@@ -131,3 +135,45 @@ def test_the_plan_pictures_friction_line_is_apart_from_the_curves(planner, defau
     reaction, ratio = fig.axes[2], fig.axes[4]
     assert reaction.get_ylim()[0] == 0.0 and ratio.get_ylim() == (0.0, 1.0)
     assert any(t.get_text().startswith("mu = 0.5") for t in ratio.texts)
+
+
+def test_a_polar_plot_of_few_directions_draws_only_what_was_measured():
+    """The tutorial's four directions: markers alone (a curve between them would claim limits at
+    the diagonals, which were not pushed), the radial labels in a gap between the directions."""
+    four = {name: STUDY_DIRECTIONS[name] for name in ("forward", "backward", "left", "right")}
+    limits = [PushLimit(name, angle, 0.4, 0.5, 0.25, 1.0 + abs(math.sin(angle)), math.inf, "", ())
+              for name, angle in four.items()]
+    ax = polar_figure(limits, "test").axes[0]
+    [line] = ax.lines
+    assert line.get_linestyle() == "None" and line.get_marker() == "o" and len(line.get_xdata()) == 4
+    at = math.radians(ax.get_rlabel_position())
+    assert min(abs(math.remainder(at - angle, 2 * math.pi)) for angle in four.values()) == pytest.approx(math.pi / 4)
+
+
+def test_the_plan_pictures_momentum_panel_spans_its_curve(planner, default_gait):
+    """The yaw momentum panel's scale is the curve's (no zero line stretching it when the
+    momentum keeps its sign)."""
+    fig = plan_figure(default_gait, planner.model)
+    momentum = fig.axes[3]
+    h = np.asarray(default_gait.figures.h_vertical)
+    low, high = momentum.get_ylim()
+    span = float(h.max() - h.min())
+    assert low >= h.min() - 0.2 * span and high <= h.max() + 0.2 * span, (low, high, h.min(), h.max())
+
+
+def test_the_optimum_maps_scale_spans_the_interior_optima():
+    """An optimum at an end of the alpha range (45 deg, no interior minimum) is outlined and does
+    not stretch the colour scale of the others (10 to 31 deg): the bar spans them, an arrow for it."""
+    optima = [Optimum(0.40, 0.50, math.radians(10.6), 20.0, 1.1, True),
+              Optimum(0.45, 0.50, math.radians(31.4), 30.0, 1.2, True),
+              Optimum(0.50, 0.50, math.radians(45.0), 40.0, 1.3, False)]
+    maps = dataclasses.replace(made_up_maps(""), optima=optima)
+    [fig] = [fig for fig, name in maps_figures(maps).values() if name.startswith("map-optimum")]
+    [alphas] = [c for c in fig.axes[0].collections if c.get_array() is not None and len(c.get_array()) == 3]
+    assert alphas.norm.vmin == pytest.approx(10.6) and alphas.norm.vmax == pytest.approx(31.4)
+    # where the ends are most tiles (a set whose least W is mostly at alpha = 0), the scale spans all
+    mostly_ends = [dataclasses.replace(o, interior=k == 0) for k, o in enumerate(optima)]
+    [fig] = [fig for fig, name in maps_figures(dataclasses.replace(maps, optima=mostly_ends)).values()
+             if name.startswith("map-optimum")]
+    [alphas] = [c for c in fig.axes[0].collections if c.get_array() is not None and len(c.get_array()) == 3]
+    assert alphas.norm.vmin == pytest.approx(10.6) and alphas.norm.vmax == pytest.approx(45.0)

@@ -65,6 +65,13 @@ def test_mujoco_walks_the_default_gait_twenty_steps_with_5_ms_pulses(planner, de
         assert record.residual < 1e-7
         assert record.friction_planned <= mu + 1e-6
         assert record.effort == pytest.approx(record.impulsive_effort, rel=0.1)
+    # The torques that act at the samples: none in the ballistic single support, a pulse's (u^- of
+    # the step's record, u^+ of the one before) within the pulses.
+    torques = [s.torque[planner.model.actuated] for item in items if isinstance(item, StepSamples) for s in item.samples]
+    pulses = [u for record in records for u in (record.u_minus, record.u_plus)]
+    pulsed = [u for u in torques if np.any(u)]
+    assert pulsed and all(any(np.array_equal(u, pulse) for pulse in pulses) for u in pulsed)
+    print(f"samples in a pulse: {len(pulsed)} of {len(torques)}")
     grf = np.vstack([np.array([s.grf for s in item.samples]) for item in items if isinstance(item, StepSamples)])
     used = np.hypot(grf[:, 0], grf[:, 1]) / grf[:, 2]
     assert np.min(grf[:, 2]) > 0 and np.max(used) <= mu

@@ -116,6 +116,26 @@ def test_world_pictures_are_the_world_states(planner, states):
                 _assert_same(x.quaternion, y.quaternion)
 
 
+@pytest.mark.parametrize("which", ["planner", "hips"])
+def test_world_efforts_are_the_joint_torques_with_their_power(which, request):
+    """The joints' efforts are the model's torques mapped to the URDF's joints: none without
+    torques, and with torques on the actuated coordinates (the passive ones, the stance foot's,
+    have none) the same power sum(effort * rate) as the model's torque . qd, either foot; the
+    power's tolerance is rounding of sums of 13 products of order 10 (1e-12)."""
+    bm = request.getfixturevalue(which).model
+    view = WorldView(bm)
+    rng = np.random.default_rng(7)
+    q, qd = rng.uniform(-1.0, 1.0, (5, bm.nq)), rng.uniform(-3.0, 3.0, (5, bm.nq))
+    torque = np.zeros((5, bm.nq))
+    torque[:, bm.actuated] = rng.uniform(-5.0, 5.0, (5, len(bm.actuated)))
+    for side in ("right", "left"):
+        assert not np.any(view.pictures(q, qd, side, np.zeros(3)).joint_efforts)
+        pictures = view.pictures(q, qd, side, np.zeros(3), torque=torque)
+        assert pictures.joint_efforts.shape == pictures.joint_velocities.shape
+        power = np.sum(pictures.joint_efforts * pictures.joint_velocities, axis=1)
+        np.testing.assert_allclose(power, np.sum(torque * qd, axis=1), rtol=0, atol=1e-12)
+
+
 @pytest.mark.parametrize("native", [True, False])
 def test_bad_batches_are_refused(planner, native):
     evaluator = SampleEvaluator(planner.model, native=native)

@@ -1,11 +1,14 @@
 """The simulator node standing (``initial_state:=standing``) over Fast DDS with a planner of its
-own: the robot stands at rest (the pelvis still on /odom, /gait_phase STANDING), a /cmd_vel to
+own: the robot stands at rest (the pelvis still on /odom, /gait_phase STANDING, learnt by a
+subscriber that joins late, /joint_states' efforts the balance controller's torques), a /cmd_vel to
 walk is refused once with the core's physical reason and the robot stands on, a push within the
 measured limit through ~/push is recovered, and the recording, read back by rosbags, holds what
 was published; a push well above the limit is a fall with its reason. MuJoCo (``engine:=mujoco``)
 stands on its contacts likewise."""
 
 from __future__ import annotations
+
+import time
 
 import pytest
 
@@ -16,11 +19,18 @@ from geometry_msgs.msg import Twist, Vector3
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
+from biped_gait.core.dynamics.closed_chain import ClosedChain
+from biped_gait.core.dynamics.hybrid import HybridStep
+from biped_gait.core.model.biped import BipedModel
+from biped_gait.core.model.params import load_params
+from biped_gait.core.model.urdf import UrdfJoints
+from biped_gait.core.walking.balance import standing_pose
 from biped_gait.ros.client import ClientSide
+from biped_gait.ros.qos import LATCHED
 from biped_gait_interfaces.msg import GaitEvent, GaitPhase
 from biped_gait_interfaces.srv import Push
 
-from .ros_helpers import planner_process, read_bag, start_simulator
+from .ros_helpers import planner_process, read_bag, start_simulator, stop_node
 
 pytestmark = pytest.mark.ros
 
@@ -47,14 +57,28 @@ def _speed(msg: Odometry) -> float:
     return float(np.linalg.norm([v.x, v.y, v.z]))
 
 
+def _static_efforts() -> dict[str, float]:
+    """The default set's standing posture's static torques (N m) by URDF joint, the back foot (the
+    right) the stance foot."""
+    bm = BipedModel.from_params(load_params(None))
+    chain = ClosedChain(bm, HybridStep(bm).exchange)
+    torque = np.zeros(bm.nq)
+    torque[chain.actuated] = standing_pose(chain).torque
+    joints = UrdfJoints(bm.params.joints, bm.coordinates)
+    return dict(zip(joints.names, joints.array(torque, "right").tolist()))
+
+
 def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_node, tmp_path):
     """Stands 2 s at rest under a /cmd_vel of 0.8 m/s from 0.5 s on, refused (once, with the
-    reason), then a push of 0.5 N s, recovered by the end (8 s); the recording holds the topics and
-    the phase."""
+    reason), then a push of 0.5 N s, recovered by the end (8 s); a subscriber to /gait_phase that
+    joins after 2 s receives STANDING (transient local); /joint_states' efforts are the standing
+    posture's static torques; the recording holds the topics and the phase."""
     side = ClientSide("standing_test_client")
     odom: list[Odometry] = []
     events: list[GaitEvent] = []
     phases: list[GaitPhase] = []
+    late: list[GaitPhase] = []
+    joint_states: list[JointState] = []
     log_file = tmp_path / "biped-gait-simulator.log"
     try:
         node = side.node
@@ -62,7 +86,7 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
         node.create_subscription(Odometry, "/odom", odom.append, 1000)
         node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
         node.create_subscription(GaitPhase, "/gait_phase", phases.append, 100)
-        node.create_subscription(JointState, "/joint_states", lambda m: None, 10)  # the walk waits for it
+        node.create_subscription(JointState, "/joint_states", joint_states.append, 1000)  # the walk waits for it
         client = node.create_client(Push, f"/{SIMULATOR}/push")
         proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", f"stand_duration:={DURATION}",
                                "real_time_factor:=1.0", "publish_rate:=100.0", "exit_when_done:=true",
@@ -71,7 +95,9 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
         side.wait(lambda: odom and _seconds(odom[-1].header) - _seconds(odom[0].header) >= 0.5, 60.0)
         timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=0.8))))
         side.wait(lambda: _seconds(odom[-1].header) - _seconds(odom[0].header) >= STILL_FOR, 60.0)
-        still = list(odom)
+        still, resting = list(odom), list(joint_states)
+        node.create_subscription(GaitPhase, "/gait_phase", late.append, LATCHED)  # joins 2 s after the phase began
+        side.wait(lambda: late, 10.0)
         response = side.call(client, Push.Request(impulse=Vector3(x=PUSH), phase=0.0))
         assert response.success, response.message
         side.wait(lambda: "refused while standing" in log_file.read_text(), 60.0)  # the start planned: a second or two
@@ -91,6 +117,14 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
           f"max {max(speeds):.1e} m/s")
     assert max(speeds) < AT_REST
     assert [(p.phase, p.step) for p in phases] == [(GaitPhase.STANDING, 0)]
+    assert [(p.phase, p.step) for p in late] == [(GaitPhase.STANDING, 0)]
+    # The torques that hold it: the posture's static torques at rest (the gain times 1e-9 rad of
+    # rest, well below 1e-5 N m), not zero.
+    static = _static_efforts()
+    print("efforts standing: " + ", ".join(f"{name} {value:.3f}" for name, value in static.items()) + " N m")
+    assert max(abs(v) for v in static.values()) > 0.5  # about 1 N m at the knees
+    for msg in resting:
+        assert dict(zip(msg.name, msg.effort)) == pytest.approx(static, abs=1e-5)
     # The push, recovered: no fall, the pelvis back where it stood and at rest by the end.
     [push] = [e for e in events if e.kind == GaitEvent.PUSH]
     assert not [e for e in events if e.kind == GaitEvent.FALL] and events[-1].kind == GaitEvent.FINISHED
@@ -153,3 +187,41 @@ def test_a_push_well_above_the_limit_is_a_fall_with_its_reason(planner_node, tmp
     print(f"\npush of 5 N s standing ({engine}): {events[-1].message}")
     assert any(reason in events[-1].message for reason in reasons)
     assert events[0].time_in_step == pytest.approx(0.5 * 0.45, abs=1e-9)
+
+
+def test_after_a_fall_its_message_is_the_last(planner_node, tmp_path):
+    """Standing, a /cmd_vel to walk starts the planning of the start (a second or more, in a
+    thread), and a push of 5 N s through ~/push makes the robot fall meanwhile: the fall's line is
+    the walk's last warning or error (the refusal, if it was not said before the fall, is not said
+    after it), and later commands are not answered."""
+    side = ClientSide("fall_test_client")
+    events: list[GaitEvent] = []
+    log_file = tmp_path / "biped-gait-simulator.log"
+    try:
+        node = side.node
+        pub = node.create_publisher(Twist, "/cmd_vel", 10)
+        node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
+        joint_states: list[JointState] = []
+        node.create_subscription(JointState, "/joint_states", joint_states.append, 1000)
+        client = node.create_client(Push, f"/{SIMULATOR}/push")
+        proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "stand_duration:=0.0",
+                               "real_time_factor:=1.0", "publish_rate:=100.0", "record:=false",
+                               "wait_for_subscribers:=1", "exit_when_done:=false")
+        side.connect(client, 60.0)
+        side.wait(lambda: joint_states, 60.0)  # it stands
+        timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=0.8))))
+        started = time.monotonic()
+        side.wait(lambda: time.monotonic() > started + 0.3)
+        response = side.call(client, Push.Request(impulse=Vector3(x=5.0), phase=0.0))
+        assert response.success, response.message
+        side.wait(lambda: any(e.kind == GaitEvent.FALL for e in events), 60.0)
+        fell = time.monotonic()
+        side.wait(lambda: time.monotonic() > fell + 5.0)  # the start's planning done meanwhile, commands still coming
+        timer.cancel()
+        assert stop_node(proc) == 1  # the walk fell
+    finally:
+        side.close()
+    lines = [line for line in log_file.read_text().splitlines() if "[WARN]" in line or "[ERROR]" in line]
+    fell = next(k for k, line in enumerate(lines) if "the robot fell in step 0" in line)
+    print("\n" + "\n".join(lines))
+    assert fell == len(lines) - 1, lines[fell:]

@@ -31,17 +31,21 @@ def planner_node(tmp_path_factory):
 
 
 def test_cmd_vel_zero_says_why_the_walk_cannot_stop(planner_node, tmp_path):
+    """The reason is said of the gait that walks when it is said: the envelope's slowest, which
+    the walk slows to (a straight gait), not the one walked when the command came."""
     side = ClientSide("start_stop_test_client")
     events: list[GaitEvent] = []
+    envelopes: list[VelocityEnvelope] = []
     log_file = tmp_path / "biped-gait-simulator.log"
     try:
         node = side.node
         pub = node.create_publisher(Twist, "/cmd_vel", 10)
         node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
         node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+        node.create_subscription(VelocityEnvelope, "/biped_gait_simulator/velocity_envelope", envelopes.append, LATCHED)
         proc = start_simulator(tmp_path, PLANNER, "steps:=0", "real_time_factor:=1.0", "record:=false",
                                "wait_for_subscribers:=1")
-        side.wait(lambda: any(e.kind == GaitEvent.TOUCHDOWN for e in events), 60.0)
+        side.wait(lambda: any(e.kind == GaitEvent.TOUCHDOWN for e in events) and envelopes, 60.0)
         timer = node.create_timer(0.2, lambda: pub.publish(Twist(linear=Vector3(x=0.0))))
         side.wait(lambda: log_file.exists() and "cannot stop from the gait" in log_file.read_text(), 60.0)
         timer.cancel()
@@ -51,7 +55,11 @@ def test_cmd_vel_zero_says_why_the_walk_cannot_stop(planner_node, tmp_path):
     finally:
         side.close()
     log = log_file.read_text()
-    print("\n" + next(line for line in log.splitlines() if "cannot stop" in line))
+    said = next(line for line in log.splitlines() if "cannot stop" in line)
+    print("\n" + said)
+    length, period = (float(said.split(f"{name} = ")[1].split(" ")[0]) for name in ("L", "T"))
+    # the slowest gait's speed, from L and T as logged (3 decimals: within 2e-3 m/s)
+    assert length / period == pytest.approx(envelopes[0].min_linear_x, abs=2e-3)
     assert "no step found beyond" in log and "the legs' reach 1.814 m" in log and "walking on at the slowest gait" in log
     assert "clamped to" in log  # 0 m/s is below the envelope, walked as its slowest speed
     assert not [e for e in events if e.kind == GaitEvent.FALL]

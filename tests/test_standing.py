@@ -73,8 +73,15 @@ def test_standing_holds_for_as_long_as_asked(standing):
     walker = _walker(standing)
     samples, fall = _stand(walker, 5.0)
     assert not fall
-    pose = standing[1].pose
+    held = standing[1]
+    pose = held.pose
     assert max(np.max(np.abs(s.q - pose.q)) for s in samples) < 1e-9
+    # The torques that act are the controller's: at rest the posture's static torques (its gain
+    # times the 1e-9 rad of rest: well below 1e-5 N m), none on the passive joints.
+    static = np.zeros(len(pose.q))
+    static[held.chain.actuated] = pose.torque
+    assert np.max(np.abs(pose.torque)) > 0.5  # about 1 N m at the knees: not zero
+    assert max(np.max(np.abs(s.torque - static)) for s in samples) < 1e-5
     assert all(len(s.feet) == 2 and s.phase == "standing" for s in samples)
     assert samples[-1].t >= 5.0 - 1e-9 and np.all(np.diff([s.t for s in samples]) > 0)
 

@@ -13,7 +13,8 @@ Written to DIR (default ``<bag directory>/analysis``):
   (``/angular_momentum``, as the paper's Fig. 5), and the centre of mass and the stance feet
   seen from above.
 
-Units: times in s from the recording's first message (for a walk: its simulated time),
+Units: a walk's times in s from its first sample (its start; ``walk_start``: that sample after the
+recording's first message),
 W (effort_cost) in N m s, state error in rad and rad/s, angles in rad (plots: deg), lengths
 in m, angular momentum in kg m^2/s. A missing, unreadable or unfinalized recording prints one
 line on stderr and exits with status 2.

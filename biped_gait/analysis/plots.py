@@ -1,7 +1,8 @@
 """Plots of a walk recording (PNG, matplotlib's Agg canvas): the joint angles over the steps,
 the yaw angular momentum about the stance foot over two successive steps with the double
 support marked (the paper's Fig. 5), and the centre of mass and the stance feet seen from
-above. Angles in degrees, times in s, lengths in m, angular momentum in kg m^2/s.
+above. Angles in degrees, times in s from the walk's first sample (its start), lengths in m,
+angular momentum in kg m^2/s.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ def _joint_figure(fig, walk: Walk) -> None:
         ax.set_ylabel(f"{what}: angle (deg)")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize="small", loc="center left", bbox_to_anchor=(1.01, 0.5))
-    upper.set_xlabel("time (s)")
+    upper.set_xlabel("time from the walk's start, its first sample (s)")
     legs.set_title(f"Joint angles over {len(walk.touchdowns())} steps")
 
 

@@ -1,7 +1,8 @@
 """Summaries of a recording: the walk it holds (joint states, angular momentum, gait events)
 and the planner calls, as JSON-ready dictionaries and as text and Markdown reports.
 
-Units: times in s from the recording's first message (for a walk: its simulated time),
+Units: a walk's times in s from its first sample (its start: the walk's simulated time 0; the
+recording begins earlier, with the robot's description and the plan), the recording's duration in s,
 W (effort_cost) in N m s, state error in rad and rad/s, angles in rad, lengths in m, angular
 momentum in kg m^2/s.
 """
@@ -20,7 +21,8 @@ from ..recording.topics import ANGULAR_MOMENTUM, GAIT_EVENTS, JOINT_STATES, MODE
 
 @dataclass
 class Walk:
-    """The samples and events of a walk recording. Times in s from the recording's start."""
+    """The samples and events of a walk recording. Times in s from the walk's first sample (its
+    start), which is ``start`` s after the recording's first message."""
 
     joint_names: list[str] = field(default_factory=list)
     joint_time: list[float] = field(default_factory=list)
@@ -32,6 +34,7 @@ class Walk:
     stance_foot: list[tuple[float, float, float]] = field(default_factory=list)  # m, world
     stance_side: list[str] = field(default_factory=list)
     events: list[tuple[float, Any]] = field(default_factory=list)  # (time, GaitEvent)
+    start: float = 0.0  # s: the walk's first sample after the recording's first message
 
     def touchdowns(self) -> list[tuple[float, Any]]:
         return [(t, e) for t, e in self.events if e.kind == EventKind.TOUCHDOWN]
@@ -65,6 +68,11 @@ def read_walk(bag: Bag) -> Walk | None:
             walk.stance_side.append(msg.stance_side)
         else:
             walk.events.append((t, msg))
+    samples = walk.joint_time[:1] + walk.momentum_time[:1]
+    walk.start = min(samples) if samples else 0.0
+    walk.joint_time = [t - walk.start for t in walk.joint_time]
+    walk.momentum_time = [t - walk.start for t in walk.momentum_time]
+    walk.events = [(t - walk.start, e) for t, e in walk.events]
     return walk
 
 
@@ -130,9 +138,10 @@ def summarize(bag: Bag) -> tuple[dict, Walk | None]:
         "duration": bag.duration,
         "messages": sum(count for _, count in bag.topics().values()),
         "topics": {topic: {"type": datatype, "messages": count} for topic, (datatype, count) in bag.topics().items()},
-        "units": {"time": "s", "effort_cost": "N m s", "state_error": "rad, rad/s", "velocity_miss": "rad/s",
+        "units": {"time": "s from the walk's first sample", "effort_cost": "N m s", "state_error": "rad, rad/s", "velocity_miss": "rad/s",
                   "step_length": "m", "period": "s", "arm_amplitude": "rad"},
         "walk": walk_summary(walk) if walk is not None else None,
+        "walk_start": walk.start if walk is not None else None,
         "planner": planner_summary(bag),
     }
     return summary, walk
@@ -151,7 +160,7 @@ def _walk_lines(walk: dict) -> list[str]:
                      f"{walk['median_state_error']:.3g}, largest {walk['max_state_error']:.3g} (step "
                      f"{walk['max_state_error_step']}); unreachable velocity at most {walk['max_velocity_miss']:.3g} rad/s")
     lines += [f"  {p['message']}" for p in walk["pushes"]]
-    falls = [f"  fall in step {f['step']} at {f['time']:.3f} s: {f['message']}" for f in walk["falls"]]
+    falls = [f"  fall in step {f['step']} at {f['time']:.3f} s of the walk: {f['message']}" for f in walk["falls"]]
     lines += falls or ["  falls: none"]
     return lines
 
@@ -183,7 +192,7 @@ def markdown_report(summary: dict) -> str:
     walk = summary["walk"]
     if walk and walk["per_step"]:
         lines += ["## Steps", "",
-                  "| step | touchdown (s) | time in step (s) | W (N m s) | state error (rad or rad/s) | velocity miss (rad/s) |",
+                  "| step | touchdown (s from the walk's start) | time in step (s) | W (N m s) | state error (rad or rad/s) | velocity miss (rad/s) |",
                   "|---:|---:|---:|---:|---:|---:|"]
         lines += [f"| {s['step']} | {s['touchdown_time']:.4f} | {s['time_in_step']:.4f} | {s['effort_cost']:.4f} | "
                   f"{s['state_error']:.3g} | {s['velocity_miss']:.3g} |" for s in walk["per_step"]]

@@ -2,7 +2,8 @@
 biped_interfaces/Phase): published when a phase begins, i.e. at the first sample of a step's
 phase (the stance foot of a single support, both feet of a double support that lasts, ``STANDING``
 while the robot stands: once, at its first sample) and at each touchdown (the instantaneous double
-support). No physics here."""
+support). The topic is transient local, depth 1 (``qos.LATCHED``): a subscriber that joins
+later, with that durability, receives the current phase at once. No physics here."""
 
 from __future__ import annotations
 

@@ -12,11 +12,13 @@ the names, units and meanings of the service's fields; checked at start); with
 Topics (stamps are the walk's simulated time, started at the node's clock: the wall clock, or
 with ``use_sim_time`` the simulated time, from 0): ``/clock`` (rosgraph_msgs/Clock, that time,
 before each sample; ``sim_clock``), ``/joint_states`` (sensor_msgs/JointState, URDF joint
-names), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
+names, the torques that act: zero in the ballistic single support, the balance controller's while
+standing), ``/odom`` (nav_msgs/Odometry, pelvis ``base_link`` in ``world``), ``/angular_momentum``
 (biped_gait_interfaces/AngularMomentum), ``/gait_events`` (biped_gait_interfaces/GaitEvent),
+``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
 ``/gait_phase`` (biped_gait_interfaces/GaitPhase: which foot stands, the step, the double
-supports, or standing), ``/tf`` (the URDF's moving joints and the pelvis in ``world``), and transient-local
-``/robot_description`` (std_msgs/String) and ``/tf_static``. The recording (MCAP, rosbag2
+supports, or standing; a late subscriber learns the current one), ``/robot_description``
+(std_msgs/String) and ``/tf_static``. The recording (MCAP, rosbag2
 directory under ``record_dir``, handed over by a thread to a recorder process of its own) holds
 the same bytes as were published, of every topic but ``/clock`` (``sim_clock``), and so does
 the optional Foxglove live view (``live_view``). Each step's samples come from the walk as
@@ -257,7 +259,7 @@ class SimulatorNode(Node):
         self.pub_events = publisher(GaitEvent, topics.GAIT_EVENTS, EVENTS)
         self.pub_description = publisher(String, topics.ROBOT_DESCRIPTION, LATCHED)
         self.pub_tf_static = publisher(TFMessage, topics.TF_STATIC, LATCHED)
-        self.phases = GaitPhases(publisher(GaitPhase, topics.GAIT_PHASE, EVENTS))
+        self.phases = GaitPhases(publisher(GaitPhase, topics.GAIT_PHASE, LATCHED))  # a late subscriber learns it
         self.clock = SimClock(self)
         self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"], value["max_curvature"],
                                   value["max_curvature_change"], publisher, value["cmd_vel_timeout"],
@@ -573,6 +575,7 @@ class SimulatorNode(Node):
                             f"touchdown of step {item.step}", item)
                 self.phases.touchdown(item.step, item.t, base_ns)
             elif isinstance(item, Fell):
+                self.speed.end()  # the fall's message is the last
                 self.failed = True
                 self.walk_state = "fell"
                 self.stats.count("falls")
@@ -580,6 +583,7 @@ class SimulatorNode(Node):
                 self._event(GaitEvent.FALL, item.step, item.stance_side, item.time_in_step, base_ns, item.t, item.reason)
                 self.diagnostics.publish()
             elif isinstance(item, Finished):
+                self.speed.end()
                 self.walk_state = "finished"
                 done = f"stood {item.t:.3f} s" if walk.standing else f"{item.steps} steps"
                 self._event(GaitEvent.FINISHED, item.steps, item.stance_side, 0.0, base_ns, item.t,

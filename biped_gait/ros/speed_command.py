@@ -12,10 +12,15 @@ command changes), which is published on ``~/velocity_envelope`` (transient local
 starts. linear.y (no sideways gaits), linear.z, angular.x and angular.y are ignored (a warning
 once).
 
-linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop: the core plans the stop step
-from the walked gait (``start_stop.plan_stop``, in a thread of its own, once per gait) and says
-why it cannot be made (for the shipped parameter sets it cannot: docs/model.md section 8.10);
-the command is then walked as the slowest gait of the envelope, as before.
+linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop: the command is walked as the
+slowest gait of the envelope, and once the walk is there (straight, at its command) the core plans
+the stop step from that gait, the one that walks (``start_stop.plan_stop``, in a thread of its
+own, once per gait and walk) and says why it cannot be made (for the shipped parameter sets it
+cannot: docs/model.md section 8.10).
+
+**The walk's end** (a fall, its steps made: ``end``): commands are no longer walked and nothing
+more is said of them, a start or stop still being planned included: the fall's message is the
+last. A reset starts a new walk (``start``).
 
 **Standing** (the walk begins standing): no follower and no envelope; a command that is not 0
 asks for a start onto the walk's gait, which the core plans (``start_stop.plan_start``, in a
@@ -79,7 +84,10 @@ class SpeedCommand:
         self._lapsed = False  # the timeout has taken the last command as 0
         self._said_clamped: tuple[float, float] | None = None
         self._said_ignored: set[str] = set()
-        self._explained: set[tuple[str, float, float]] = set()  # the starts and stops planned: (kind, L, T)
+        self._explained: set[tuple[str, float, float]] = set()  # the walk's starts and stops planned: (kind, L, T)
+        self._stop_asked = False  # the last command asks the walk to stop
+        self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
+        self._ended = False  # the walk ended: commands are ignored until the next starts
         self._grid = DEFAULTS.walk_steps
         self.pub_envelope = publisher(VelocityEnvelope, topics.VELOCITY_ENVELOPE, LATCHED)
 
@@ -94,7 +102,10 @@ class SpeedCommand:
         """Make the follower of ``walker``'s gait (``source``: its parameter set as given), and
         publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time); with
         ``standing``, the walker stands: commands are refused (module docstring)."""
-        self._last, self._lapsed = None, False
+        self._last, self._lapsed, self._stop_asked = None, False, False
+        with self._lock:
+            self._walk, self._ended = self._walk + 1, False
+            self._explained.clear()
         if standing:
             with self._lock:
                 self.follower, self._standing, pending = None, walker, self._pending
@@ -117,8 +128,18 @@ class SpeedCommand:
         if pending is not None:
             self._command(*pending)
 
+    def end(self) -> None:
+        """The walk ended (a fall, its steps made): commands are ignored and nothing more is said
+        of them until a walk starts again (module docstring). Called before the end is reported."""
+        with self._lock:
+            self.follower, self._standing, self._pending = None, None, None
+            self._walk, self._ended = self._walk + 1, True
+
     def on_twist(self, msg: Twist) -> None:
-        """A /cmd_vel message: linear.x the commanded speed (m/s), angular.z the yaw rate (rad/s)."""
+        """A /cmd_vel message: linear.x the commanded speed (m/s), angular.z the yaw rate (rad/s);
+        ignored once the walk ended."""
+        if self._ended:
+            return
         ignored = [name for name, value in (("linear.y", msg.linear.y), ("linear.z", msg.linear.z),
                                             ("angular.x", msg.angular.x), ("angular.y", msg.angular.y))
                    if abs(value) > 1e-9 and name not in self._said_ignored]
@@ -146,9 +167,9 @@ class SpeedCommand:
                               "from standing onto", "standing on")
             return
         follower = self.follower
-        if speed < STOP_SPEED:
-            self._explain("stop", follower.orbit, follower.bm.params, "speed command: cannot stop from",
-                          "walking on at the slowest gait")
+        if follower is None:  # the walk ended meanwhile
+            return
+        self._stop_asked = speed < STOP_SPEED  # said from the gait that walks once it is there (before_step)
         if yaw_rate and follower.envelope.max_curvature == 0.0 and "angular.z" not in self._said_ignored:
             self._said_ignored.add("angular.z")
             self.node.get_logger().warn("speed command: angular.z ignored: the model walks straight (turning needs "
@@ -166,21 +187,27 @@ class SpeedCommand:
         with the core (once per kind and gait, in a thread: it takes a second or two) and log why
         it cannot be made, as ``what`` the gait: the reason; ``then``."""
         key = (kind, orbit.step_length, orbit.period)
-        if key in self._explained:
-            return
-        self._explained.add(key)
+        with self._lock:
+            if key in self._explained:
+                return
+            self._explained.add(key)
+            walk = self._walk
         logger, grid = self.node.get_logger(), self._grid
 
         def plan() -> None:
             reason = why_not(kind, HybridStep(BipedModel.from_params(params)), orbit, grid)
-            logger.warn(f"{what} the gait L = {orbit.step_length:.3f} m, T = {orbit.period:.3f} s: {reason}; {then}")
+            with self._lock:  # said only while that walk goes on
+                if self._walk == walk:
+                    logger.warn(f"{what} the gait L = {orbit.step_length:.3f} m, T = {orbit.period:.3f} s: {reason}; "
+                                f"{then}")
 
         threading.Thread(target=plan, name=f"{kind}-plan", daemon=True).start()
 
     def before_step(self, walker: Walker) -> None:
         """One transition towards the commanded speed and turn, if the walker is not at them, the
         timeout's 0 first if no command came for that long (walker thread)."""
-        if self.follower is None:
+        follower = self.follower
+        if follower is None:
             return
         with self._lock:
             last, silent = self._last, 0.0
@@ -195,10 +222,14 @@ class SpeedCommand:
                 f"speed command: no /cmd_vel for {silent:.3f} s of simulated time (cmd_vel_timeout {self.timeout:g} s): "
                 "taken as 0 m/s; stopping is not possible yet, so the walk goes on at the slowest gait")
             self._command(0.0, 0.0)
-        transition = self.follower.before_step(walker)
+        transition = follower.before_step(walker)
         if transition is not None and transition.failure:
             self.node.get_logger().warn(f"speed command: no transition before step {transition.step}: "
                                         f"{transition.failure}")
+        if self._stop_asked and transition is None and follower.curvature == 0.0 and abs(
+                follower.speed - follower.commanded) < 1e-9:  # at the slowest gait, straight: the gait that walks
+            self._explain("stop", follower.orbit, follower.bm.params, "speed command: cannot stop from",
+                          "walking on at the slowest gait")
 
 
 def envelope_msg(envelope: Envelope, rule: str, stamp) -> VelocityEnvelope:

@@ -57,12 +57,13 @@ def _quaternion(q) -> Quaternion:
 
 
 def joint_state_msg(names: tuple[str, ...], floats: np.ndarray, ints: np.ndarray) -> JointState:
-    """The URDF joints' (``names``) angles (rad, the first half of ``floats``) and rates (rad/s,
-    the second half), stamped ``ints`` (s, ns); efforts zero (N m): the single support is
-    ballistic, no joint torque acts between the impulses of the double supports."""
+    """The URDF joints' (``names``) angles (rad, the first third of ``floats``), rates (rad/s, the
+    second) and the torques that act (N m, the third: zero in the ballistic single support, the
+    balance controller's while standing, a pulse's in a double support that lasts), stamped
+    ``ints`` (s, ns)."""
     n = len(names)
     return JointState(header=Header(stamp=_time(ints)), name=list(names), position=floats[:n],
-                      velocity=floats[n:], effort=np.zeros(n))
+                      velocity=floats[n:2 * n], effort=floats[2 * n:])
 
 
 def odometry_msg(floats: np.ndarray, ints: np.ndarray) -> Odometry:
@@ -108,7 +109,7 @@ class SampleMessages:
     links of the URDF's moving joints ``link_frames``)."""
 
     def __init__(self, joint_names: tuple[str, ...], link_frames: tuple[tuple[str, str], ...]) -> None:
-        self.joints = CdrTemplate(partial(joint_state_msg, joint_names), 2 * len(joint_names), 2)
+        self.joints = CdrTemplate(partial(joint_state_msg, joint_names), 3 * len(joint_names), 2)
         self.odometry = CdrTemplate(odometry_msg, 13, 2)
         self.momentum = {side: CdrTemplate(partial(momentum_msg, side=side), 12, 3) for side in SIDES}
         self.tf = CdrTemplate(partial(_moving_tf_msg, link_frames), 7 * (len(link_frames) + 1), 2)
@@ -121,7 +122,8 @@ class SampleMessages:
         pelvis = np.hstack([world.pelvis_position, world.pelvis_quaternion])
         links = np.concatenate([world.link_translations, world.link_quaternions], axis=2).reshape(n, -1)
         return {
-            topics.JOINT_STATES: self.joints.encode(np.hstack([world.joint_positions, world.joint_velocities]), stamps),
+            topics.JOINT_STATES: self.joints.encode(
+                np.hstack([world.joint_positions, world.joint_velocities, world.joint_efforts]), stamps),
             topics.ODOM: self.odometry.encode(
                 np.hstack([pelvis, world.pelvis_linear_velocity, world.pelvis_angular_velocity]), stamps),
             topics.ANGULAR_MOMENTUM: self.momentum[side].encode(

@@ -222,8 +222,10 @@ def plan_figure(gait: Gait, model: BipedModel) -> Figure:
     top = max(mu if math.isfinite(mu) else 0.0, float(np.nanmax(np.abs(used))) if np.isfinite(used).any() else 0.0)
     ratio.set_ylim(0.0, 2.0 * top or 1.0)
     ratio.set_ylabel("friction ratio |F_xy| / F_z", color="C3")
-    momentum.plot(t, gait.figures.h_vertical, color="C2")
-    momentum.axhline(0.0, color="grey", linewidth=0.5)
+    h = np.asarray(gait.figures.h_vertical)
+    momentum.plot(t, h, color="C2")
+    if h.min() <= 0.0 <= h.max():  # the zero line only where the momentum crosses it: the scale shows its variation
+        momentum.axhline(0.0, color="grey", linewidth=0.5)
     momentum.set_ylabel("yaw momentum about the stance foot (kg m^2/s)")
     for ax in (angles, reaction, momentum):
         ax.set_xlabel("time in the step t (s)")

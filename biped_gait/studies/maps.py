@@ -226,17 +226,21 @@ def _no_gait(ax, maps: WalkingMaps) -> list[Patch]:
 
 
 def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig: Figure, digits: int = 1,
-                 mark_ends: bool = False, missing: str = "") -> list:
+                 mark_ends: bool = False, missing: str = "", scaled: Sequence[bool] | None = None) -> list:
     """Tiles of ``values`` at the optima's (L, T) (``maps.optima_nodes``), each with its value in
     ``digits`` decimals (as many as the colour bar's range needs to tell the tiles apart), dark
     text on light tiles, over the cells without an admissible gait shaded; a value that is not
     finite is an empty tile marked '-', ``missing`` saying why; ``mark_ends``: outline the tiles
-    whose least W is at an end of the alpha range (no interior minimum). Returns the legend's
-    handles: the shading, the empty tile (if any), the outline (if any)."""
+    whose least W is at an end of the alpha range (no interior minimum); ``scaled``: the tiles the
+    colour scale spans (None: all), the others coloured at its ends (the colour bar's arrows) so
+    that one outlier does not flatten the rest. Returns the legend's handles: the shading, the
+    empty tile (if any), the outline (if any)."""
     handles: list = _no_gait(ax, maps)
     lengths = [o.step_length for o in maps.optima]
     periods = [o.period for o in maps.optima]
-    points = ax.scatter(lengths, periods, c=values, s=420, marker="s", cmap="viridis")
+    spanned = [v for k, v in enumerate(values) if math.isfinite(v) and (scaled is None or scaled[k])]
+    low, high = (min(spanned), max(spanned)) if spanned else (None, None)
+    points = ax.scatter(lengths, periods, c=values, s=420, marker="s", cmap="viridis", vmin=low, vmax=high)
     for x, y, v in zip(lengths, periods, values):
         red, green, blue, _ = points.cmap(points.norm(v)) if math.isfinite(v) else (1, 1, 1, 1)
         light = 0.299 * red + 0.587 * green + 0.114 * blue > 0.55
@@ -251,7 +255,10 @@ def _scatter_map(ax, maps: WalkingMaps, values: Sequence[float], label: str, fig
     if mark_ends and ends:
         handles.append(ax.scatter(*zip(*ends), s=420, marker="s", facecolors="none", edgecolors="#e41a1c",
                                   linewidths=1.8, label="least W at an end of the alpha range (no interior minimum)"))
-    fig.colorbar(points, ax=ax, label=label)
+    finite = [v for v in values if math.isfinite(v)]
+    below, above = bool(spanned) and min(finite) < low, bool(spanned) and max(finite) > high
+    fig.colorbar(points, ax=ax, label=label,
+                 extend="both" if below and above else "min" if below else "max" if above else "neither")
     ax.set_xlabel("step length L (m)")
     ax.set_ylabel("period T (s)")
     return handles
@@ -264,11 +271,16 @@ def _heading(maps: WalkingMaps) -> str:
 
 def optimum_figure(maps: WalkingMaps) -> Figure:
     """alpha*(L, T) (deg) and W*(L, T) (N m s) of the maps' mode over the admissible region, the
-    tiles without an interior minimum (alpha* at an end of the range) outlined."""
+    tiles without an interior minimum (alpha* at an end of the range) outlined and, where they are
+    fewer than the others, left out of the alpha* colour scale (their values written on them)."""
     fig, (left, right) = _figure(2)
     fig.set_size_inches(12.0, 5.6)
+    interior = [o.interior for o in maps.optima]
+    # alpha* at an end of the range (0 or 45 deg) is no optimum but the range's bound: where such
+    # tiles are few, the alpha* scale spans the interior ones, which they would flatten
+    scaled = interior if 2 * sum(interior) >= len(interior) else None
     handles = _scatter_map(left, maps, [math.degrees(o.alpha) for o in maps.optima],
-                           "optimal arm amplitude alpha* (deg)", fig, mark_ends=True)
+                           "optimal arm amplitude alpha* (deg)", fig, mark_ends=True, scaled=scaled)
     _scatter_map(right, maps, [o.W for o in maps.optima], "least effort W* (N m s)", fig, mark_ends=True)
     fig.legend(handles=handles, fontsize="small", loc="outside lower center", ncols=2, markerscale=0.5)
     fig.suptitle(f"The optimal arm swing over the admissible region ({maps.optima_nodes}), {_heading(maps)}",

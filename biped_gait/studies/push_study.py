@@ -213,22 +213,37 @@ def _figure(polar: bool = False) -> tuple[Figure, object]:
     return fig, fig.add_subplot(projection="polar" if polar else None)
 
 
+CURVE_GAP = math.radians(45.0)
+"""rad: the polar plot joins its directions by a curve only where none is farther than this from the
+next (8 or more directions around); fewer are markers alone, as a curve between them would claim
+limits that were not measured."""
+
+
 def polar_figure(limits: Sequence[PushLimit], title: str) -> Figure:
-    """The largest push recovered (N s, the radius) against its direction, one closed curve per
-    alpha (world axes: forward up, left to the left, as seen from above), the pushed step's
-    stance foot (the right: the walk's first step) named at its side."""
+    """The largest push recovered (N s, the radius) against its direction, one set of markers per
+    alpha, a closed curve through them where the directions are close enough (``CURVE_GAP``)
+    (world axes: forward up, left to the left, as seen from above), the pushed step's stance foot
+    (the right: the walk's first step) named at its side; the radial labels, with their unit, in
+    the widest gap between the measured directions."""
+    from matplotlib.ticker import FuncFormatter
+
     fig, ax = _figure(polar=True)
     ax.set_theta_zero_location("N")  # forward up; angles counter-clockwise: left to the left
     for i, alpha in enumerate(sorted({limit.alpha for limit in limits})):
         curve = sorted((limit for limit in limits if limit.alpha == alpha), key=lambda limit: limit.angle % (2 * math.pi))
         angles = [limit.angle % (2 * math.pi) for limit in curve]
         values = [limit.limit for limit in curve]
-        ax.plot(angles + angles[:1], values + values[:1], "o-", color=f"C{i}", markersize=4,
-                label=f"alpha = {math.degrees(alpha):.1f} deg")
+        gaps = np.diff([*angles, angles[0] + 2 * math.pi])
+        closed = len(angles) >= 3 and float(np.max(gaps)) <= CURVE_GAP + 1e-9
+        ax.plot(angles + angles[:1] if closed else angles, values + values[:1] if closed else values,
+                "o-" if closed else "o", color=f"C{i}", markersize=5, label=f"alpha = {math.degrees(alpha):.1f} deg")
     ax.set_xticks(np.radians([0, 45, 90, 135, 180, 225, 270, 315]),
                   ["forward", "", "left", "", "backward", "", "right:\nstance\nfoot", ""])
-    ax.set_rlabel_position(112.5)  # the push scale between the named directions
-    ax.text(np.radians(112.5), ax.get_rmax() * 1.13, "N s", ha="center", va="center", fontsize="small")
+    measured = sorted({limit.angle % (2 * math.pi) for limit in limits})
+    gaps = np.diff([*measured, measured[0] + 2 * math.pi])
+    widest = int(np.argmax(gaps))
+    ax.set_rlabel_position(math.degrees(measured[widest] + gaps[widest] / 2))  # off the data
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g} N s"))
     ax.set_title(f"{title}\nright foot in stance; radius: the largest push recovered (N s)", fontsize="medium", pad=18)
     ax.legend(fontsize="small", loc="lower left", bbox_to_anchor=(-0.15, -0.12))
     return fig

@@ -240,17 +240,18 @@ class Atlas:
                         float(n["min_late_swing_height"][index]), float(n["swing_arrival_speed"][index]))
 
     def hint(self, point: tuple[float, float, float]) -> str:
-        """Where the nearest admissible gaits are, for a refusal at (L m, T s, alpha rad): the
-        admissible periods at the nearest grid L and alpha, else the nearest admissible node."""
-        L, _, alpha = point
+        """Where the nearest admissible gaits are, for a refusal at (L m, T s, alpha rad) of a
+        request this atlas describes (its other fields the atlas's): the admissible periods at the
+        nearest grid L and alpha, without the refused T (``period_runs``), else the nearest
+        admissible node."""
+        L, period, alpha = point
         i = int(np.argmin(np.abs(self.grid.step_lengths - L)))
         k = int(np.argmin(np.abs(self.grid.alphas - alpha)))
-        row = self.nodes["status"][i, :, k] == NodeStatus.ADMISSIBLE
+        runs = period_runs(self.grid.periods, self.nodes["status"][i, :, k] == NodeStatus.ADMISSIBLE, period)
         where = f"L = {self.grid.step_lengths[i]:.3f} m, alpha = {math.degrees(self.grid.alphas[k]):.0f} deg"
         what = "within the margins" if self.margins else "admissible"
-        if row.any():
-            periods = self.grid.periods[row]
-            return f"nearest {what} (atlas grid): T in [{periods.min():.3f}, {periods.max():.3f}] s at {where}"
+        if runs:
+            return f"nearest {what} (atlas grid): {runs} at {where}"
         index = self.nearest(point)
         if index is None:
             return f"no {what} gait in the atlas of {self.params} ({self.mode.value})"
@@ -287,6 +288,25 @@ class Atlas:
         return cls(meta["params"], GaitMode.parse(meta["mode"]), meta["fingerprint"], float(meta["friction"]), grid, nodes,
                    float(meta.get("build_seconds", math.nan)), meta.get("source", ""),
                    options=meta.get("options", {}))
+
+
+def period_runs(periods: np.ndarray, admissible: np.ndarray, refused: float) -> str:
+    """The runs of consecutive ``periods`` (s, ascending) that are ``admissible`` (a mask), as
+    "T in [a, b] s" (runs joined by "or"), each cut where the ``refused`` period (s) lies in it, so
+    that none holds it; '' if there are none."""
+    admissible = np.asarray(admissible, dtype=bool) & ~np.isclose(periods, refused, rtol=0.0, atol=1e-9)
+    runs, start = [], None
+    for j, ok in enumerate(admissible):
+        if start is not None and (not ok or periods[j - 1] < refused < periods[j]):
+            runs.append((periods[start], periods[j - 1]))
+            start = None
+        if ok and start is None:
+            start = j
+    if start is not None:
+        runs.append((periods[start], periods[-1]))
+    if not runs:
+        return ""
+    return "T in " + " or ".join(f"[{a:.3f}, {b:.3f}]" for a, b in runs) + " s"
 
 
 def write_archive(path: Path, meta: dict, arrays: dict[str, np.ndarray]) -> Path:

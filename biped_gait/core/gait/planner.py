@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .admissibility import judge
-from .atlas import Atlas, AtlasError, atlas_path
+from .atlas import Atlas, AtlasError, atlas_path, period_runs
 from .bvp import CLOSURES, BvpSolution, solve_bvp
 from .configurations import GaitMode
 from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
@@ -463,7 +463,8 @@ class GaitPlanner:
         return path
 
     def _find(self, problem: GaitProblem) -> Gait:
-        """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold."""
+        """The gait of ``problem`` on the human-like branch: atlas, then continuation, then cold;
+        a refusal with its hint (``_hinted``)."""
         point = (problem.step_length, problem.period, problem.arm_amplitude)
         atlas = self.atlas(problem.mode)
         if atlas is not None and problem.margins:
@@ -475,7 +476,7 @@ class GaitPlanner:
             if not _near(first, guess):
                 first = None
             elif first.admissible or not atlas.admissible_near(point):
-                return self._hinted(first, atlas, point)
+                return self._hinted(first, atlas, problem)
         origin = self._origin(problem, atlas)
         if origin is not None:
             guess = continue_to(self.hybrid, self.coarse_flow or self.flow, problem.mode, problem.closure, self.settings,
@@ -483,10 +484,10 @@ class GaitPlanner:
             if guess is not None:
                 gait = self._solve(problem, guess, "continuation")
                 if gait.converged and (gait.admissible or first is None):
-                    return self._hinted(gait, atlas, point)
+                    return self._hinted(gait, atlas, problem)
         if first is not None:
-            return self._hinted(first, atlas, point)
-        return self._hinted(self._solve(problem, None, "cold"), atlas, point)
+            return self._hinted(first, atlas, problem)
+        return self._hinted(self._solve(problem, None, "cold"), atlas, problem)
 
     def _origin(self, problem: GaitProblem, atlas: Atlas | None):
         """Where a continuation to ``problem`` starts: the nearest admissible atlas node, else
@@ -499,11 +500,52 @@ class GaitPlanner:
         step = solve_bvp(self.hybrid, self.flow, *SEED, problem.mode, problem.closure, None, self.settings, self.coarse_flow)
         return (SEED, (step.qd_a, step.theta)) if step.converged else None
 
-    @staticmethod
-    def _hinted(gait: Gait, atlas: Atlas | None, point: tuple[float, float, float]) -> Gait:
+    def _hinted(self, gait: Gait, atlas: Atlas | None, problem: GaitProblem) -> Gait:
+        """``gait``, with a hint if it is refused: a region of admissible gaits that holds the
+        request's other fields (the atlas's periods, if the atlas was built for those fields;
+        else periods solved at them, ``_solved_hint``), which does not hold the refused one."""
         if gait.admissible or atlas is None:
             return gait
-        return replace(gait, hint=atlas.hint(point))
+        differ = self._beyond_atlas(problem)
+        point = (problem.step_length, problem.period, problem.arm_amplitude)
+        return replace(gait, hint=self._solved_hint(gait, problem, atlas, differ) if differ else atlas.hint(point))
+
+    def _beyond_atlas(self, problem: GaitProblem) -> str:
+        """The fields of ``problem`` the atlases were not built for (theirs: a request's defaults),
+        said as a user gives them; '' if none."""
+        built = validate_request(GaitRequest(problem.step_length, problem.period, problem.arm_amplitude,
+                                             problem.mode), self.params)
+        options, default = problem.options, built.options
+        fields = [(problem.step_width != built.step_width, f"step width {problem.step_width:.3f} m"),
+                  (problem.closure != built.closure, f"closure {problem.closure}"),
+                  (problem.effort != built.effort, f"effort {problem.effort}"),
+                  (options.friction != default.friction, f"friction {options.friction:g}"),
+                  (options.rate_bound != default.rate_bound, f"joint-rate bound {options.rate_bound:g} rad/s"),
+                  (options.coordinates != default.coordinates, f"effort on {options.coordinates} angles")]
+        return ", ".join(text for differs, text in fields if differs)
+
+    def _solved_hint(self, gait: Gait, problem: GaitProblem, atlas: Atlas, differ: str) -> str:
+        """The hint of a refusal whose fields ``differ`` from the atlas's: the gaits at the atlas's
+        periods at the request's L, alpha and other fields, solved by continuation in T from the
+        refused ``gait`` each way (a way ends where a solve does not converge), their admissible
+        runs without the refused period."""
+        periods = atlas.grid.periods
+        admissible = np.zeros(len(periods), dtype=bool)
+        for way in (1.0, -1.0):
+            guess = gait.warm_start()
+            for j in sorted((j for j in range(len(periods)) if way * (periods[j] - problem.period) > 1e-9),
+                            key=lambda j: way * periods[j]):
+                if guess is None:
+                    break
+                solved = self._solve(replace(problem, period=float(periods[j])), guess, "continuation")
+                admissible[j], guess = solved.admissible, solved.warm_start()
+        what = "within the margins" if problem.margins else "admissible"
+        where = f"L = {problem.step_length:.3f} m, alpha = {math.degrees(problem.arm_amplitude):.0f} deg, {differ}"
+        runs = period_runs(periods, admissible, problem.period)
+        if runs:
+            return f"nearest {what} (solved along T from this gait): {runs} at {where}"
+        return (f"no {what} gait along T from this gait, at the atlas's periods in [{periods[0]:.3f}, "
+                f"{periods[-1]:.3f}] s, at {where}")
 
     def _solve(self, problem: GaitProblem, guess: tuple[np.ndarray, float] | None, found: str,
                steps: int = 0) -> Gait:

@@ -39,14 +39,18 @@ class Foot:
 class Sample:
     """The state at one publishing instant: time in the walk (s) and in the step, q, qd (the step's
     model coordinates), the contact force [Fx, Fy, Fz, Mz] (N, N m, the step's model axes) at each
-    foot on the ground (one row per foot of ``feet``, the step's stance foot first), the step, the
-    kind of its phase (``PHASE_KINDS``), and the robot in world terms (``Walk`` fills it)."""
+    foot on the ground (one row per foot of ``feet``, the step's stance foot first), the joint
+    torques that act (N m, q's coordinates, zero on the passive ones: zero in a ballistic single
+    support, the balance controller's while standing, a pulse's in a double support that lasts),
+    the step, the kind of its phase (``PHASE_KINDS``), and the robot in world terms (``Walk`` fills
+    it)."""
 
     t: float
     t_step: float
     q: np.ndarray
     qd: np.ndarray
     forces: np.ndarray
+    torque: np.ndarray
     feet: tuple[Foot, ...]
     step: int = 0
     phase: str = SINGLE_SUPPORT

@@ -8,7 +8,7 @@ integration step at a time until the phase's guard fires, cutting the steps at t
 velocity jump, ``push``) and collecting the publishing instants k / rate of the walk, which the
 engine's output gives at the phase's end (one call: the hybrid engine's interpolant, MuJoCo's
 records); the phase gives the contact forces at them (unless the engine measured them) and the
-lowest link, and the first sample that falls (a held foot's vertical reaction not positive or
+lowest link, the phase's motion the joint torques that act (``Motion.torques``), and the first sample that falls (a held foot's vertical reaction not positive or
 its force out of the friction cone; where the engine measures the feet's tips, one lifted or slid
 more than ``LIFT_LIMIT``, ``SLIP_LIMIT``; a link below the ground after the first 5 % of the step)
 ends the walk. Then the phase's reset returns the transition, a value: the next phase, the
@@ -30,7 +30,7 @@ import numpy as np
 
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import DEFAULTS, Settings
-from .engines.engine import Engine
+from .engines.engine import Engine, Motion
 from .engines.hybrid import HybridEngine
 from .events import Fall, Sample, StepOutcome, Touchdown
 from .feedback import Feedback
@@ -205,7 +205,7 @@ class Walker:
                     end = End(AFTER, t, *engine.state(ws))
         except Fall as exc:  # a phase that plans again after a push found it cannot
             fall = str(exc)
-        samples, sample_fall = self._samples(phase, s, segments, taus, jumps)
+        samples, sample_fall = self._samples(phase, motion, s, segments, taus, jumps)
         if sample_fall or fall:
             self._pushes = []
             return PhaseRun(samples, tuple(applied), fall=sample_fall or fall)
@@ -237,10 +237,11 @@ class Walker:
         engine.set_velocity(ws, qd)
         return q, qd
 
-    def _samples(self, phase: Phase, s: WalkState, segments: list, taus: list[float],
+    def _samples(self, phase: Phase, motion: Motion, s: WalkState, segments: list, taus: list[float],
                  jumps: list[float]) -> tuple[list[Sample], str]:
-        """The samples at ``taus`` (s in the step) in the phase's ``segments``, evaluated in one
-        call, up to the first that falls; and the fall's reason ('' for none)."""
+        """The samples at ``taus`` (s in the step) in the phase's ``segments`` (integrated with
+        ``motion``: its torques), evaluated in one call, up to the first that falls; and the fall's
+        reason ('' for none)."""
         samples: list[Sample] = []
         if not taus:
             return samples, ""
@@ -250,11 +251,12 @@ class Walker:
         moved = None
         if measured is not None:
             forces, moved = measured.forces, measured.moved
+        torques = motion.torques(q, qd, np.array(taus))
         feet = phase.feet(s)
         friction = min(self.engine.contact_friction, phase.friction)
         checked_after = LINKS_CHECKED_AFTER * s.aim.period
         for k, tau in enumerate(taus):
-            samples.append(Sample(s.t + tau, tau, q[k], qd[k], forces[k], feet, s.step, phase.kind))
+            samples.append(Sample(s.t + tau, tau, q[k], qd[k], forces[k], torques[k], feet, s.step, phase.kind))
             self.sample_index += 1
             fall = self._fall(samples[-1], float(lowest[k]), checked_after, friction,
                               None if moved is None else moved[k])

@@ -157,7 +157,7 @@ class Walk:
             yield from pushes
             return
         pictures = self.world.pictures(np.array([x.q for x in samples]), np.array([x.qd for x in samples]),
-                                       s.stance_side, s.stance_foot, s.heading)
+                                       s.stance_side, s.stance_foot, s.heading, np.array([x.torque for x in samples]))
         times = np.array([x.t for x in samples])
         start = 0
         for push in pushes:

@@ -45,6 +45,7 @@ class WorldState:
     joint_names: tuple[str, ...]
     joint_positions: list[float]
     joint_velocities: list[float]
+    joint_efforts: list[float]  # N m: the torques that act at the joints
     pelvis_position: np.ndarray
     pelvis_quaternion: np.ndarray
     pelvis_linear_velocity: np.ndarray  # in the pelvis frame (m/s), as nav_msgs/Odometry's twist
@@ -64,6 +65,7 @@ class WorldPictures:
     joint_names: tuple[str, ...]  # the URDF's moving joints
     joint_positions: np.ndarray  # n x joints, ``joint_names`` order (rad)
     joint_velocities: np.ndarray  # n x joints (rad/s)
+    joint_efforts: np.ndarray  # n x joints (N m): the torques that act at the joints
     pelvis_position: np.ndarray  # n x 3, world (m)
     pelvis_quaternion: np.ndarray  # n x 4, pelvis in world
     pelvis_linear_velocity: np.ndarray  # n x 3, in the pelvis frame (m/s)
@@ -92,6 +94,7 @@ class WorldPictures:
             joint_names=self.joint_names,
             joint_positions=self.joint_positions[i].tolist(),
             joint_velocities=self.joint_velocities[i].tolist(),
+            joint_efforts=self.joint_efforts[i].tolist(),
             pelvis_position=self.pelvis_position[i],
             pelvis_quaternion=self.pelvis_quaternion[i],
             pelvis_linear_velocity=self.pelvis_linear_velocity[i],
@@ -148,11 +151,13 @@ class WorldView:
         return out
 
     def pictures(self, q: np.ndarray, qd: np.ndarray, stance_side: str, stance_foot: np.ndarray,
-                 heading: float = 0.0) -> WorldPictures:
+                 heading: float = 0.0, torque: np.ndarray | None = None) -> WorldPictures:
         """The world pictures of model states (rows of ``q``, ``qd``) with the ``stance_side``
-        foot at ``stance_foot`` and the step's model frame at ``heading`` (rad), evaluated in one
-        call."""
+        foot at ``stance_foot`` and the step's model frame at ``heading`` (rad), the joint torques
+        ``torque`` acting (rows, N m, model coordinates; None: none), evaluated in one call. A
+        joint's torque maps as its rate does (the same sign: the power is the same)."""
         q, qd = np.atleast_2d(q), np.atleast_2d(qd)
+        torque = np.zeros(q.shape) if torque is None else np.atleast_2d(torque)
         mirror = np.diag(world_axes(stance_side))  # positions: (x, y, z) -> (x, -/+ y, z)
         axial = -mirror if stance_side == "left" else np.ones(3)  # axial vectors under the mirror
         poses = self.samples.poses(q, qd, mirrored=stance_side == "left")
@@ -166,6 +171,7 @@ class WorldView:
             joint_names=self.joints.names,
             joint_positions=positions,
             joint_velocities=self.joints.array(qd, stance_side),
+            joint_efforts=self.joints.array(torque, stance_side),
             pelvis_position=stance_foot + turn.vectors(mirror * poses.pelvis_position),
             pelvis_quaternion=turn.quaternions(poses.pelvis_quaternion),
             pelvis_linear_velocity=mirror * poses.pelvis_linear_velocity,

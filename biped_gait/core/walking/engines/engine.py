@@ -58,6 +58,21 @@ class Motion:
     pulses: tuple[Pulse, ...] = ()
     held: Held | None = None
 
+    def torques(self, q: np.ndarray, qd: np.ndarray, taus: np.ndarray) -> np.ndarray:
+        """The joint torques (N m, rows of q's size, zero on the passive joints) that act at the
+        instants ``taus`` (s in the step) in the states (``q``, ``qd``: rows): the pulses on then
+        (a pulse acts from its start to before its end, as the engines apply it), and the held
+        law's torques at each state; zero in a ballistic motion."""
+        q, taus = np.atleast_2d(q), np.asarray(taus, dtype=float)
+        out = np.zeros(q.shape)
+        for pulse in self.pulses:
+            out[(pulse.start <= taus) & (taus < pulse.end)] += pulse.torque
+        if self.held is not None:
+            actuated = self.held.chain.actuated
+            for k in range(len(q)):
+                out[k, actuated] += self.held.law(q[k], qd[k])
+        return out
+
 
 @dataclass(frozen=True, eq=False)
 class Contacts:
