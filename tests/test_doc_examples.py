@@ -35,6 +35,7 @@ RUN = {
     ".venv/bin/biped-gait plan --min-clearance 0.005": (1, "meets the limits but not the margins"),
     ".venv/bin/biped-gait plan --friction-margin 0.1": (0, "admissible True"),
     ".venv/bin/biped-gait plan --rate-bound 12": (0, "admissible True"),
+    ".venv/bin/biped-gait plan --double-support 0.1 --json plan.json": (0, "double support of 0.1 s: E ="),
     ".venv/bin/biped-gait plan --params aoustin2013-hips --alpha-deg 20": (0, "admissible True"),
     ".venv/bin/biped-gait plan --params aoustin2013-hips --alpha-deg 20 --step-width 0.3 --period 0.5":
         (0, "step width 0.300 m"),

@@ -14,12 +14,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from biped_gait.core.dynamics.closed_chain import ClosedChain
 from biped_gait.core.dynamics.symbolic import SymbolicModel
 from biped_gait.core.gait import views
 from biped_gait.core.gait.lasting import LastingRequest
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.model.biped import SWING_TIP, BipedModel
 from biped_gait.core.model.params import load_params
+from biped_gait.core.walking.balance import standing_pose
 
 DEFAULT = GaitRequest(0.45, 0.45, math.radians(23.5))
 # IPOPT's tolerance is 1e-9 on the scaled equations; what the checks below allow is a thousand times
@@ -155,3 +157,31 @@ def test_a_bad_duration_is_one_line_and_exit_2(value):
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert proc.stderr.strip().count("\n") == 0 and "double_support must be a duration >= 0 s" in proc.stderr
+
+
+@pytest.fixture(scope="module")
+def rest(planner):
+    chain = ClosedChain(planner.model, planner.hybrid.exchange)
+    return standing_pose(chain, DEFAULT.step_length).q
+
+
+@pytest.mark.parametrize("kind", ["stop", "start"])
+def test_a_stop_and_a_start_over_one_second(planner, gait, rest, kind):
+    """From the gait's touchdown to rest in the standing posture on the same feet, and from it onto
+    the gait, each over 1 s: the closed chain's equations through Pinocchio, the reactions pressing
+    within the friction pyramid, the torques within their limits, and the phase at rest at its end
+    (the stop) or its start (the start)."""
+    support = getattr(planner.lasting, kind)(gait, LastingRequest(1.0), rest)
+    assert support.success, support.message
+    bm = planner.model
+    weight = bm.total_mass * bm.params.gravity
+    at = np.asarray(bm.ds_of_single)
+    still = -1 if kind == "stop" else 0
+    assert np.max(np.abs(support.xd[still])) < 1e-9 and np.max(np.abs(support.x[still][at] - rest)) < 1e-9
+    limits = np.array([bm.coordinates[k].spec.limits.effort for k in bm.actuated])
+    for x, xd, xdd, torque, forces in zip(support.x, support.xd, support.xdd, support.torques, support.contact_forces):
+        residual, _ = _pinocchio_residual(bm, x[at], xd, xdd, torque, forces)
+        assert residual < 1e-6 * weight
+        assert np.all(forces[:, 2] > -SOLVER * weight)
+        assert np.all(np.abs(torque) <= limits + SOLVER * 100)
+    assert support.friction_used <= bm.params.friction + 1e-6

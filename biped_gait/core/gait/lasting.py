@@ -51,7 +51,10 @@ from ..dynamics.flow import BallisticFlow
 from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
 from .flow_function import CoupledConstraints, FlowFunction
 
-INTERVALS = 20  # Hermite-Simpson intervals over d: 41 collocation points (nodes and midpoints)
+# Hermite-Simpson intervals over d (2 n + 1 collocation points, nodes and midpoints), by kind. The
+# stop and the start (a second or so) on 10: on 20 IPOPT did not finish either at d = 1 s (1,000
+# iterations; infeasibility detected) where on 10 it does (about 120 and 330 iterations).
+INTERVALS = {"periodic": 20, "stop": 10, "start": 10, "limit": 0}
 TOLERANCE = 1e-9  # IPOPT's tolerance on the scaled KKT conditions and on the constraint violation
 PYRAMID_SIDES = 8  # the friction cone's inscribed pyramid, as the impulses' LP (docs/model.md 4.4)
 MAX_ITERATIONS = 1000  # the solves that converge take 200 to 600
@@ -100,7 +103,7 @@ class Boundary:
 @dataclass(frozen=True, eq=False)
 class LastingSupport:
     """A solved (or refused) double support of ``duration`` seconds. Samples at every collocation
-    point (nodes and midpoints, 2 INTERVALS + 1 instants from 0 to d, both included): ``t`` (s),
+    point (nodes and midpoints, 2 n + 1 instants from 0 to d, both included, n its ``INTERVALS``): ``t`` (s),
     ``x``, ``xd``, ``xdd`` in the double-support coordinates X, ``torques`` (N m, actuated joints),
     ``contact_forces`` (old and new stance tip, world axes, N, n x 2 x 3). The impulses: ``i_minus``,
     ``i_plus`` (N m s), ``held_impact_impulses`` (old and new tip, N s, 2 x 3). Efforts (N m s):
@@ -190,7 +193,7 @@ class LastingProgram:
     """The nonlinear program of a double support of ``intervals`` collocation intervals for the
     model ``bm`` (built once, solved for any gait and duration: those are its parameters)."""
 
-    def __init__(self, bm: BipedModel, kind: str, intervals: int = INTERVALS, effort: str = "l1",
+    def __init__(self, bm: BipedModel, kind: str, intervals: int, effort: str = "l1",
                  friction: float = 0.5, exchange=None, flow: BallisticFlow | None = None) -> None:
         if kind not in KINDS:
             raise ValueError(f"kind must be one of {', '.join(KINDS)}, got {kind!r}")
@@ -561,7 +564,7 @@ class LastingPlanner:
     def program(self, kind: str, effort: str) -> LastingProgram:
         key = (kind, effort)
         if key not in self.programs:
-            self.programs[key] = LastingProgram(self.bm, kind, 0 if kind == "limit" else INTERVALS, effort,
+            self.programs[key] = LastingProgram(self.bm, kind, INTERVALS[kind], effort,
                                                 self.friction, self.exchange, self.flow)
         return self.programs[key]
 
@@ -588,3 +591,14 @@ class LastingPlanner:
             limit = self.program("limit", request.effort).solve(boundary, 0.0)
             return program.solve(boundary, request.duration, None, self.program("limit", request.effort).values(limit.solution))
         return program.solve(boundary, request.duration, start)
+
+    def stop(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
+        """From ``gait``'s touchdown to rest in the standing posture ``rest`` (rad, on the same two
+        feet: ``core/walking/balance.standing_pose`` at the gait's step length and width): I^-, the
+        held impact, a double support of ``request.duration`` s ending at rest (docs/model.md 14)."""
+        return self.program("stop", request.effort).solve(self.boundary(gait, rest), request.duration)
+
+    def start(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
+        """From rest in the standing posture ``rest`` onto ``gait``: a double support of
+        ``request.duration`` s from rest to the gait's touchdown posture, then I^+ onto its next step."""
+        return self.program("start", request.effort).solve(self.boundary(gait, rest), request.duration)
