@@ -61,7 +61,8 @@ def lasting_summary(support: LastingSupport, limit_effort: float, paper_effort: 
         return f"double support of {support.duration:g} s: refused: {support.message}"
     peak = ", ".join(f"{v:.0f}" for v in support.peak_torque)
     return (f"double support of {support.duration:g} s: E = {support.effort_total:.3f} N m s "
-            f"(impulses {abs(support.i_minus).sum():.2f} + {abs(support.i_plus).sum():.2f}, torques {support.effort_l1:.2f}); "
+            f"(impulses {abs(support.i_minus).sum():.2f} + {abs(support.i_plus).sum():.2f}, "
+            f"torques {support.effort_l1:.2f}); "
             f"E(0+) = {limit_effort:.3f}, W = {paper_effort:.3f} N m s\n"
             f"  peak torques {peak} N m; friction used {support.friction_used:.3f}; IPOPT {support.iterations} "
             f"iterations, {support.solve_time_s:.2f} s")

@@ -94,7 +94,8 @@ class SymbolicModel:
         """The generalized forces (N, N m) that give the accelerations a at (q, v) under gravity."""
         transforms = self._transforms(q)
         vel, acc, force, subspace = [], [], [], []
-        for (parent, _r, _p, kind, axis, iq, (mass, lever, rot_inertia)), (rotation, position) in zip(self.joints, transforms):
+        for joint, (rotation, position) in zip(self.joints, transforms):
+            parent, _r, _p, kind, axis, iq, (mass, lever, rot_inertia) = joint
             if kind == "revolute":
                 s_lin, s_ang = [ca.DM.zeros(3, 1)], [_unit(axis)]
                 qd, qdd = [v[iq]], [a[iq]]
@@ -115,7 +116,8 @@ class SymbolicModel:
             # The parent's motion in this joint's frame (SE3 actInv), then the joint's own.
             vi_lin = ca.mtimes(rt, pv - ca.cross(position, pw)) + j_lin
             vi_ang = ca.mtimes(rt, pw) + j_ang
-            ai_lin = ca.mtimes(rt, pa - ca.cross(position, pal)) + jd_lin + ca.cross(vi_ang, j_lin) + ca.cross(vi_lin, j_ang)
+            ai_lin = (ca.mtimes(rt, pa - ca.cross(position, pal)) + jd_lin + ca.cross(vi_ang, j_lin)
+                      + ca.cross(vi_lin, j_ang))
             ai_ang = ca.mtimes(rt, pal) + jd_ang + ca.cross(vi_ang, j_ang)
             vel.append((vi_lin, vi_ang))
             acc.append((ai_lin, ai_ang))

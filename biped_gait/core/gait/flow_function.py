@@ -3,9 +3,8 @@
 ``FlowFunction(flow, period)`` maps the step's start (q0, qd0) to its end [q(T); qd(T)] by the
 planner's own shooting flow (``core/dynamics/flow.py``: RK8 on its fixed grid), and its Jacobian is
 the flow's exact sensitivities (its variational equations, as the shooting's Newton uses). The
-flow's second derivatives are not computed: the Hessian IPOPT is given leaves out the single
-support's curvature (the flow's Jacobian's own Jacobian is zero here), which costs convergence
-speed near the solution, not the solution: the constraints and their Jacobian are exact.
+flow's second derivatives are not computed: IPOPT approximates the program's Hessian (limited
+memory), its constraints and their Jacobian exact (``CoupledConstraints``).
 
 A value and its Jacobian are kept for the last point asked, so that IPOPT's constraint and Jacobian
 evaluations at one iterate integrate once.
@@ -39,12 +38,12 @@ class _Evaluation:
         self.jacobian = res.sens if with_jacobian else None
 
 
-class _FlowJacobian(ca.Callback):
-    """d [q(T); qd(T)] / d [q0; qd0] at the start [q0; qd0]."""
+class _Dense(ca.Callback):
+    """A function of one dense vector to one dense matrix, evaluated by ``value``."""
 
-    def __init__(self, name: str, evaluation: _Evaluation, size: int) -> None:
+    def __init__(self, name: str, size: int, shape: tuple[int, int]) -> None:
         ca.Callback.__init__(self)
-        self.evaluation, self.size = evaluation, size
+        self.size, self.shape = size, shape
         self.construct(name, {})
 
     def get_n_in(self):
@@ -57,21 +56,22 @@ class _FlowJacobian(ca.Callback):
         return ca.Sparsity.dense(self.size, 1)
 
     def get_sparsity_out(self, i):
-        return ca.Sparsity.dense(self.size, self.size)
+        return ca.Sparsity.dense(*self.shape)
 
     def eval(self, arg):
-        start = np.array(arg[0]).ravel()
+        return [self.value(np.array(arg[0]).ravel())]
+
+
+class _FlowJacobian(_Dense):
+    """d [q(T); qd(T)] / d [q0; qd0] at the start [q0; qd0]."""
+
+    def __init__(self, name: str, evaluation: _Evaluation, size: int) -> None:
+        self.evaluation = evaluation
+        super().__init__(name, size, (size, size))
+
+    def value(self, start: np.ndarray) -> np.ndarray:
         self.evaluation.at(start, True)
-        return [self.evaluation.jacobian]
-
-    def has_jacobian(self):
-        return True
-
-    def get_jacobian(self, name, inames, onames, opts):
-        """Zero: the flow's second derivatives are left out of the program's Hessian."""
-        start = ca.MX.sym("start", self.size)
-        out = ca.MX.sym("out", self.size, self.size)
-        return ca.Function(name, [start, out], [ca.MX(self.size * self.size, self.size)], inames, onames, opts)
+        return self.evaluation.jacobian
 
 
 class CoupledConstraints(ca.Callback):
@@ -88,14 +88,14 @@ class CoupledConstraints(ca.Callback):
         self.nw, self.np = inner.sparsity_in(0).size1(), inner.sparsity_in(1).size1()
         self.ng = inner.sparsity_out(0).size1() + flow.size
         w, p = ca.MX.sym("w", self.nw), ca.MX.sym("p", self.np)
-        select = end_map
-        coupling = ca.mtimes(ca.DM(ca.sparsify(ca.DM(select))), w) - flow(ca.mtimes(self.start_map, w))
+        select = ca.DM(ca.sparsify(ca.DM(end_map)))
+        coupling = ca.mtimes(select, w) - flow(ca.mtimes(self.start_map, w))
         self.whole = ca.Function("g", [w, p], [ca.vertcat(inner(w, p), coupling)])
         inner_jacobian = inner.jacobian()
         out = ca.MX.sym("out", self.ng)
         jac_inner = inner_jacobian(w, p, ca.MX(inner.sparsity_out(0).size1(), 1))[0]
         flow_jacobian = flow.jacobian_function(ca.mtimes(self.start_map, w))
-        jac_coupling = ca.DM(ca.sparsify(ca.DM(select))) - ca.mtimes(flow_jacobian, self.start_map)
+        jac_coupling = select - ca.mtimes(flow_jacobian, self.start_map)
         self.jacobian_function = ca.Function("jac_g", [w, p, out],
                                              [ca.vertcat(jac_inner, jac_coupling), ca.MX(self.ng, self.np)])
         self.construct(name, {})
@@ -129,29 +129,15 @@ class CoupledConstraints(ca.Callback):
         return ca.Function(name, [w, p, out], self.jacobian_function(w, p, out), inames, onames, opts)
 
 
-class FlowFunction(ca.Callback):
+class FlowFunction(_Dense):
     """[q0; qd0] -> [q(T); qd(T)] over the ballistic single support of ``period`` s on ``flow``'s
     grid (module docstring). Keep the object alive while a function built on it is used."""
 
     def __init__(self, name: str, flow: BallisticFlow, period: float, nq: int) -> None:
-        ca.Callback.__init__(self)
         self.evaluation = _Evaluation(flow, period)
-        self.size = 2 * nq
-        self.construct(name, {})
+        super().__init__(name, 2 * nq, (2 * nq, 1))
         self.jacobian_function = _FlowJacobian(name + "_jacobian", self.evaluation, self.size)
 
-    def get_n_in(self):
-        return 1
-
-    def get_n_out(self):
-        return 1
-
-    def get_sparsity_in(self, i):
-        return ca.Sparsity.dense(self.size, 1)
-
-    def get_sparsity_out(self, i):
-        return ca.Sparsity.dense(self.size, 1)
-
-    def eval(self, arg):
-        self.evaluation.at(np.array(arg[0]).ravel(), False)
-        return [self.evaluation.value]
+    def value(self, start: np.ndarray) -> np.ndarray:
+        self.evaluation.at(start, False)
+        return self.evaluation.value

@@ -214,6 +214,7 @@ class LastingProgram:
                              "written in the program yet")
         self.rows = [0, 2]  # the new tip's held rows (x, z): section 12
         self.actuated = np.asarray(bm.actuated)
+        self.effort_limits = np.array([bm.coordinates[k].spec.limits.effort for k in self.actuated])  # N m
         self.weight = bm.total_mass * bm.params.gravity
         self.impulse_scale = self.weight * IMPULSE_TIME
         self._build()
@@ -229,7 +230,7 @@ class LastingProgram:
 
     def _build(self) -> None:
         nq, nx, na, n_int = self.nq, self.nx, self.na, self.intervals
-        at, roots, rows = self.at.tolist(), self.roots.tolist(), self.rows
+        at, rows = self.at.tolist(), self.rows
         periodic = self.kind == "periodic"
         arrives, departs = self.kind in ("stop", "limit", "periodic"), self.kind in ("start", "limit", "periodic")
         xs, vs, a_s = ca.SX.sym("x", nx), ca.SX.sym("v", nx), ca.SX.sym("a", nx)
@@ -251,8 +252,10 @@ class LastingProgram:
         nlp = _Program()
         mu = self.friction
         angles = np.arange(PYRAMID_SIDES) * 2 * np.pi / PYRAMID_SIDES
-        pyramid = ca.DM(np.column_stack([np.cos(angles), np.sin(angles),
-                                         np.full(PYRAMID_SIDES, -mu * np.cos(np.pi / PYRAMID_SIDES))])) if math.isfinite(mu) else None
+        pyramid = None
+        if math.isfinite(mu):
+            pyramid = ca.DM(np.column_stack([np.cos(angles), np.sin(angles),
+                                             np.full(PYRAMID_SIDES, -mu * np.cos(np.pi / PYRAMID_SIDES))]))
 
         def press(force, what):  # a reaction that presses, within the floor's pyramid
             nlp.le(-force[2], f"{what} presses")
@@ -279,14 +282,16 @@ class LastingProgram:
             outputs.update(qd_next=qd_next, flow_end=flow_end)
         if arrives:
             # I^-: the old tip held (eqs. 6-7), the swing tip coming down onto the ground.
-            xm, im, r1m = nlp.var("xd_minus", nx), nlp.var("i_minus", na, scale=JOINT_IMPULSE), nlp.var("r1_minus", 3, scale=self.impulse_scale)
+            xm, im = nlp.var("xd_minus", nx), nlp.var("i_minus", na, scale=JOINT_IMPULSE)
+            r1m = nlp.var("r1_minus", 3, scale=self.impulse_scale)
             nlp.eq(ca.mtimes(d_t, xm - p_xb) - ca.mtimes(b, im) - ca.mtimes(j1_t.T, r1m), "I^- (eq. 6)")
             nlp.eq(ca.mtimes(j1_t, xm), "I^- (eq. 7)")
             press(r1m, "the old tip's reaction to I^-")
             nlp.le(ca.mtimes(j2_t[2, :], xm), "the swing tip comes down")
             cost(im, 1.0, JOINT_IMPULSE)
             # The passive impact, both tips held.
-            xh, p1, p2 = nlp.var("xd_held", nx), nlp.var("p_old", 3, scale=self.impulse_scale), nlp.var("p_new", 3, scale=self.impulse_scale)
+            xh = nlp.var("xd_held", nx)
+            p1, p2 = nlp.var("p_old", 3, scale=self.impulse_scale), nlp.var("p_new", 3, scale=self.impulse_scale)
             nlp.eq(ca.mtimes(d_t, xh - xm) - ca.mtimes(j1_t.T, p1) - ca.mtimes(j2_t.T, p2), "the held impact")
             nlp.eq(ca.mtimes(j1_t, xh), "the held impact: old tip at rest")
             nlp.eq(ca.mtimes(j2_t[rows, :], xh), "the held impact: new tip at rest")
@@ -297,7 +302,7 @@ class LastingProgram:
         if self.kind == "limit":
             # The held velocity must be one the closed chain can carry for an instant: some torques
             # within their limits keep both reactions pressing (what any d > 0 asks from its start).
-            effort_limit = np.array([self.bm.coordinates[k].spec.limits.effort for k in self.actuated])
+            effort_limit = self.effort_limits
             self._held(nlp, p_q, xh[at], nlp.var("a", nq, scale=ACCELERATION),
                        nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight),
                        b, press)
@@ -357,7 +362,8 @@ class LastingProgram:
         end_map[:, end:end + 2 * nq] = np.eye(2 * nq)
         scale = np.concatenate(nlp.scales)
         self.flow_function = FlowFunction("ballistic_flow", self.flow, math.nan, nq)
-        self.constraints = CoupledConstraints("constraints", inner, self.flow_function, start_map * scale, end_map * scale)
+        self.constraints = CoupledConstraints("constraints", inner, self.flow_function, start_map * scale,
+                                              end_map * scale)
         self.row_names = self.row_names + ["the ballistic flow from the lift-off"] * (2 * nq)
         self.lbg = np.concatenate([self.lbg, np.zeros(2 * nq)])
         self.ubg = np.concatenate([self.ubg, np.zeros(2 * nq)])
@@ -370,8 +376,7 @@ class LastingProgram:
         and midpoints in time order; the first node at ``q_first`` with velocity ``v_first`` (None: at
         rest), the last at ``q_last`` (at rest when ``rest_last``)."""
         nq, na, n_int, rows = self.nq, self.na, self.intervals, self.rows
-        at, roots = self.at.tolist(), self.roots.tolist()
-        effort_limit = np.array([self.bm.coordinates[k].spec.limits.effort for k in self.actuated])
+        effort_limit = self.effort_limits
         lower_q, upper_q = self._ranges()
         h = p_d / n_int
         points, previous = [], None
@@ -393,7 +398,8 @@ class LastingProgram:
                 v_m = (v0 + v) / 2 + h / 8 * (a0 - a)
                 nlp.eq(q - q0 - h / 6 * (v0 + 4 * v_m + v), "collocation")
                 nlp.eq(v - v0 - h / 6 * (a0 + 4 * a_m + a), "collocation")
-                points.append([(q0 + q) / 2 + h / 8 * (v0 - v), v_m, a_m, nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE),
+                tau_m = nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE)
+                points.append([(q0 + q) / 2 + h / 8 * (v0 - v), v_m, a_m, tau_m,
                                nlp.var("f_new_mid", 3, scale=self.weight), 4.0])
             points.append([q, v, a, tau, f2, 1.0 if k in (0, n_int) else 2.0])
             previous = (q, v, a)
@@ -589,7 +595,8 @@ class LastingPlanner:
         boundary = self.boundary(gait)
         if start is None:
             limit = self.program("limit", request.effort).solve(boundary, 0.0)
-            return program.solve(boundary, request.duration, None, self.program("limit", request.effort).values(limit.solution))
+            seed = self.program("limit", request.effort).values(limit.solution)
+            return program.solve(boundary, request.duration, None, seed)
         return program.solve(boundary, request.duration, start)
 
     def stop(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
