@@ -42,8 +42,8 @@ from ..gait.atlas import Atlas, AtlasError, atlas_path
 from ..gait.bvp import solve_bvp
 from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
-from .speed import MAX_SLOPE, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
-from .steering import pelvis_pitch
+from .speed import MAX_SLOPE, MIN_AUTHORITY, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
+from .steering import pelvis_pitch, planned_momentum
 from .orbit import Cycle, PlannedOrbit, as_cycle
 from .runner import Walker
 from ..model.biped import BipedModel
@@ -54,6 +54,13 @@ MAX_CURVATURE = 0.5  # 1/m: the default bound on the curvature (R >= 2 m; admiss
 # default gait reach about 1 / 1.1 m, docs/results.md)
 SPEED_RULES = ("least_effort", "cadence")
 NEARER = (0.5, 0.25)  # the fractions of a transition tried when it cannot be reached
+MAX_PITCH = 0.05
+"""rad: a transition step changes the planned momentum about the feet line by at most what this
+touchdown pitch steers (the authority a + b c times it, ``steering``): 0.7 kg m^2/s at the nine
+joints' 14 to 15 per rad, as their ramps of 0.05 m/s per step already ask; with the hips, whose
+authority is 3 to 7 per rad at the walkable gaits, 0.15 to 0.35 (docs/model.md section 8.8)."""
+MOMENTUM_SHRINKS = 3  # a transition shrunk at most this many times to keep within that bound
+SHRINK_MARGIN = 0.9  # each time to this fraction of the bound, in proportion to the change it asked
 
 
 @dataclass(frozen=True)
@@ -109,7 +116,7 @@ class SpeedFollower:
         self.max_curvature = max_curvature if turning is not None else 0.0
         self.max_curvature_change = max_curvature_change
         cycle = as_cycle(orbit)
-        self.orbit = cycle[0]
+        self.orbit, self.cycle = cycle[0], cycle  # the gait aimed at: its first step, its steps
         self.speed = self.orbit.step_length / self.orbit.period  # of the gait aimed at (m/s)
         self.curvature = 0.0 if math.isinf(self.orbit.turn_radius) else 1.0 / self.orbit.turn_radius  # 1/m
         # (L m, T s) and warm start (qd(0), theta) of the last two straight gaits aimed at, oldest first
@@ -171,7 +178,10 @@ class SpeedFollower:
         full = current + np.clip(goal - current, -bounds, bounds)
         start = time.perf_counter()
         failures = []
-        for fraction in (1.0, *NEARER):
+        fractions, shrunk = [1.0, *NEARER], 0
+        limit = self._momentum_limit(walker)
+        while fractions:
+            fraction = fractions.pop(0)
             speed, period, curvature = current + fraction * (full - current)
             curvature = 0.0 if abs(curvature) < 1e-12 else float(curvature)
             step_length = float(speed * period)
@@ -179,9 +189,15 @@ class SpeedFollower:
                 orbit, failure = self._orbit(walker, step_length, float(period))
             else:
                 orbit, failure = self._stride_cycle(walker, step_length, float(period), curvature)
-            if orbit is not None:
+            if orbit is None:
+                failures.append(failure)
+                continue
+            excess = self._momentum_change(walker, orbit) / limit
+            if excess <= 1.0 or shrunk == MOMENTUM_SHRINKS:
                 break
-            failures.append(failure)
+            shrunk += 1  # a change of momentum the steering cannot follow in one step: a part of it
+            fractions.insert(0, fraction * SHRINK_MARGIN / excess)
+            orbit = None
         if orbit is None:
             self._held = command
             speed, period, curvature = current
@@ -194,12 +210,30 @@ class SpeedFollower:
         self.transitions.append(transition)
         if orbit is not None:
             walker.retarget(orbit)
-            self.orbit, self.speed, self.curvature = as_cycle(orbit)[0], float(speed), curvature
+            self.cycle = as_cycle(orbit)
+            self.orbit, self.speed, self.curvature = self.cycle[0], float(speed), curvature
             if curvature == 0.0:  # straight again: the next turn starts from a straight gait
                 self._stride = None
                 self._solved = [*self._solved[-1:],
                                 ((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(self.bm, self.orbit.q_t)))]
         return transition
+
+    def _momentum_limit(self, walker: Walker) -> float:
+        """The largest change of the planned momentum about the feet line (kg m^2/s) a transition
+        step may ask of ``walker``: what a touchdown pitch of ``MAX_PITCH`` steers at the gait it
+        walks (the smallest authority of its steps); inf without momentum steering."""
+        steerings = [step.steering for step in walker.state.aim.steps if step.steering is not None]
+        if not steerings:
+            return math.inf
+        return MAX_PITCH * max(min(steering.ref.authority for steering in steerings), MIN_AUTHORITY)
+
+    def _momentum_change(self, walker: Walker, orbit: PlannedOrbit | Cycle) -> float:
+        """The largest change of a step's planned momentum about the feet line at its touchdown
+        (kg m^2/s) from the gait walked to ``orbit`` (step by step of a stride; each against
+        the first step of a straight gait)."""
+        walked, aimed = self.cycle, as_cycle(orbit)
+        return max(abs(planned_momentum(walker.hybrid, new) - planned_momentum(walker.hybrid, walked[k % len(walked)]))
+                   for k, new in enumerate(aimed))
 
     def _stride_cycle(self, walker: Walker, step_length: float, period: float,
                       curvature: float) -> tuple[Cycle | None, str]:
