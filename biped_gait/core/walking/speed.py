@@ -16,8 +16,12 @@ advances L in T. Two rules pick (L, T) for a speed, at the walk's arm amplitude 
   L range (0.25 to 0.65 m, where the default sets have admissible gaits for T >= 0.425 s).
 
 A node is walkable (``walkable_nodes``) if the atlas calls it admissible, its open-loop
-spectral radius (the Floquet multipliers, ``stability``) is at most ``MAX_RADIUS``, and its swing
-foot comes down onto the ground at the touchdown, vertical velocity below -``ARRIVAL_MARGIN``.
+spectral radius (the Floquet multipliers, ``stability``) is at most ``MAX_RADIUS``, its swing
+foot comes down onto the ground at the touchdown, vertical velocity below -``ARRIVAL_MARGIN``,
+and the walker's momentum steering can steer there: its pitch authority a + b c is at least
+``MIN_AUTHORITY``, at this period and every shorter one of the step length (with the hips the
+authority vanishes at T = 0.55 to 0.62 s, where the least effort per metre would walk the slow
+speeds: every walk that slowed down fell there).
 Without the bound on the radius the least effort per metre lies at long periods (0.55 to 0.6 s),
 where a gait amplifies a perturbation 1e4 to 1e6 times per step: the walker's transition and
 re-aim problems there are so ill-conditioned that they fail within a few steps. And the
@@ -47,11 +51,11 @@ MAX_SLOPE = 0.25  # s per m/s: the least-effort period's largest change with the
 MAX_RADIUS = 1000.0  # the largest open-loop spectral radius of a walkable gait
 ARRIVAL_MARGIN = 0.005  # m/s: a walkable gait's swing tip comes down at least this fast at the touchdown
 MIN_AUTHORITY = 3.0
-"""kg m^2/s per rad: a walkable gait's steering authority a + b c at least (``steering``): a
-momentum error of 0.15 kg m^2/s, what a transition step may leave (``transitions.MAX_PITCH``),
-asks a touchdown pitch of at most 0.05 rad. With the nine joints it is 14 to 15 over the
-walkable gaits; with the hips it falls from 7 to 11 at T = 0.3 s through 0 at T = 0.55 to
-0.62 s (docs/model.md section 8.8)."""
+"""kg m^2/s per rad: a walkable gait's steering authority a + b c at least (``steering``), on the
+short-period side of the line where it vanishes: there the steered re-aim is singular and the
+walker falls (the hips' walk at 0.6 m/s fell at T = 0.62 s, a + b c = -1, and walked through
+1.4). With the nine joints it is 14 to 15 over the walkable gaits; with the hips it falls from
+7 to 11 at T = 0.3 s through 0 at T = 0.55 to 0.62 s (docs/model.md section 8.8)."""
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,10 @@ straight gait), continued in the curvature from it when the solve leaves its bra
 whose swing foot would come up to the touchdown from under the ground (``speed.walkable_nodes``)
 is refused.
 
-A transition that cannot be reached (not solved, or not admissible) is replaced by the nearest
+A transition whose gait's momentum about the feet line (which no impulse changes) differs from
+the walked gait's by more than the walker's momentum steering follows in a step (``MAX_PITCH``
+times its authority) is shrunk in proportion, so that the change is spread over more steps. A
+transition that cannot be reached (not solved, or not admissible) is replaced by the nearest
 one that can: the gaits a half and a quarter of the way to it. If none can, the follower holds
 the gait it walks and says so once, and tries again only when the command changes: a gait is
 never retried step after step.
@@ -56,9 +59,15 @@ SPEED_RULES = ("least_effort", "cadence")
 NEARER = (0.5, 0.25)  # the fractions of a transition tried when it cannot be reached
 MAX_PITCH = 0.05
 """rad: a transition step changes the planned momentum about the feet line by at most what this
-touchdown pitch steers (the authority a + b c times it, ``steering``): 0.7 kg m^2/s at the nine
-joints' 14 to 15 per rad, as their ramps of 0.05 m/s per step already ask; with the hips, whose
-authority is 3 to 7 per rad at the walkable gaits, 0.15 to 0.35 (docs/model.md section 8.8)."""
+touchdown pitch steers at the gait walked (its authority a + b c times it, ``steering``): 0.7 to
+0.75 kg m^2/s with the nine joints (14 to 15 per rad), whose ramps of 0.05 m/s per step ask up
+to 1.2; with the hips (3 to 11 per rad) 0.15 to 0.55, where their ramps ask up to 2.2. With 0.1
+rad the hips' walk at 0.9 m/s still fell in its second step (docs/model.md section 8.8)."""
+CATCH_UP = 2.0
+"""A transition step leaves the walker's momentum about the feet line at most this many times that
+bound from its new gait's (the walker lags behind a ramp; with the hips' authority a lag of three
+times the bound fell within three steps of a ramp from 0.9 m/s up); a walker further behind waits
+a step, no transition, and catches up."""
 MOMENTUM_SHRINKS = 3  # a transition shrunk at most this many times to keep within that bound
 SHRINK_MARGIN = 0.9  # each time to this fraction of the bound, in proportion to the change it asked
 
@@ -77,6 +86,7 @@ class Transition:
     solve_seconds: float
     failure: str = ""
     curvature: float = 0.0
+    waited: bool = False  # no transition this step: the walker's momentum is still catching up with its gait
 
 
 @dataclass(frozen=True)
@@ -179,7 +189,8 @@ class SpeedFollower:
         start = time.perf_counter()
         failures = []
         fractions, shrunk = [1.0, *NEARER], 0
-        limit = self._momentum_limit(walker)
+        limit, carried = self._momentum_limit(walker), self._carried_momentum(walker)
+        walked = planned_momentum(walker.hybrid, self.orbit)
         while fractions:
             fraction = fractions.pop(0)
             speed, period, curvature = current + fraction * (full - current)
@@ -192,11 +203,18 @@ class SpeedFollower:
             if orbit is None:
                 failures.append(failure)
                 continue
-            excess = self._momentum_change(walker, orbit) / limit
-            if excess <= 1.0 or shrunk == MOMENTUM_SHRINKS:
+            change, lag = planned_momentum(walker.hybrid, as_cycle(orbit)[0]) - walked, carried - walked
+            if (abs(change) <= limit and abs(lag - change) <= CATCH_UP * limit) or shrunk == MOMENTUM_SHRINKS:
                 break
-            shrunk += 1  # a change of momentum the steering cannot follow in one step: a part of it
-            fractions.insert(0, fraction * SHRINK_MARGIN / excess)
+            # more momentum than the steering follows in a step: the part of the transition it can
+            reach = min(limit / abs(change), (lag + math.copysign(CATCH_UP * limit, change)) / change) * fraction
+            if reach <= 0.0:  # the walker is behind its gait already: it catches up first
+                self.transitions.append(Transition(walker.state.step, commanded, self.speed, self.orbit.step_length,
+                                                   self.orbit.period, time.perf_counter() - start, "",
+                                                   self.curvature, waited=True))
+                return self.transitions[-1]
+            shrunk += 1
+            fractions.insert(0, min(fraction, reach) * SHRINK_MARGIN)
             orbit = None
         if orbit is None:
             self._held = command
@@ -227,13 +245,13 @@ class SpeedFollower:
             return math.inf
         return MAX_PITCH * max(min(steering.ref.authority for steering in steerings), MIN_AUTHORITY)
 
-    def _momentum_change(self, walker: Walker, orbit: PlannedOrbit | Cycle) -> float:
-        """The largest change of a step's planned momentum about the feet line at its touchdown
-        (kg m^2/s) from the gait walked to ``orbit`` (step by step of a stride; each against
-        the first step of a straight gait)."""
-        walked, aimed = self.cycle, as_cycle(orbit)
-        return max(abs(planned_momentum(walker.hybrid, new) - planned_momentum(walker.hybrid, walked[k % len(walked)]))
-                   for k, new in enumerate(aimed))
+    def _carried_momentum(self, walker: Walker) -> float:
+        """The momentum about the feet line (kg m^2/s) the step ``walker`` begins carries from its
+        touchdown, which no impulse changes: the closure's gain at that touchdown times the step's
+        initial velocity."""
+        hybrid, state = walker.hybrid, walker.state
+        gain, _ = hybrid.impact(hybrid.exchange.configuration(state.q)).closure_gradients()
+        return float(gain @ state.qd)
 
     def _stride_cycle(self, walker: Walker, step_length: float, period: float,
                       curvature: float) -> tuple[Cycle | None, str]:
