@@ -70,6 +70,7 @@ times the bound fell within three steps of a ramp from 0.9 m/s up); a walker fur
 a step, no transition, and catches up."""
 MOMENTUM_SHRINKS = 3  # a transition shrunk at most this many times to keep within that bound
 SHRINK_MARGIN = 0.9  # each time to this fraction of the bound, in proportion to the change it asked
+PUT_OFF = 0.5  # a transition the walker put off: the next one this fraction of the way
 
 
 @dataclass(frozen=True)
@@ -136,6 +137,7 @@ class SpeedFollower:
         self._commanded: tuple[float, float] | None = None  # (speed m/s, curvature 1/m); None: walk the plan
         self._held: tuple[float, float] | None = None  # a command none of whose transitions could be reached
         self._lock = threading.Lock()
+        self._put_offs = 0  # transitions the walker put off since the last it made
         self.transitions: list[Transition] = []
 
     @property
@@ -176,6 +178,8 @@ class SpeedFollower:
         ``failure``, which says so."""
         with self._lock:
             command = self._commanded
+        if walker.state.aim.pending is None and walker.cycle[0] is not self.cycle[0]:
+            self._put_off(walker)
         if command is None or command == self._held:
             return None
         commanded, aimed = command
@@ -188,8 +192,9 @@ class SpeedFollower:
         full = current + np.clip(goal - current, -bounds, bounds)
         start = time.perf_counter()
         failures = []
-        fractions, shrunk = [1.0, *NEARER], 0
+        fractions, shrunk = [PUT_OFF ** self._put_offs * f for f in (1.0, *NEARER)], 0
         limit, carried = self._momentum_limit(walker), self._carried_momentum(walker)
+        rate = walker.state.aim.step.steering.rate if walker.state.aim.step.steering is not None else 1.0
         walked = planned_momentum(walker.hybrid, self.orbit)
         while fractions:
             fraction = fractions.pop(0)
@@ -203,11 +208,11 @@ class SpeedFollower:
             if orbit is None:
                 failures.append(failure)
                 continue
-            change, lag = planned_momentum(walker.hybrid, as_cycle(orbit)[0]) - walked, carried - walked
-            if (abs(change) <= limit and abs(lag - change) <= CATCH_UP * limit) or shrunk == MOMENTUM_SHRINKS:
+            change, lag = planned_momentum(walker.hybrid, as_cycle(orbit)[0]) - walked, rate * (carried - walked)
+            if abs(lag - change) <= limit or shrunk == MOMENTUM_SHRINKS:
                 break
             # more momentum than the steering follows in a step: the part of the transition it can
-            reach = min(limit / abs(change), (lag + math.copysign(CATCH_UP * limit, change)) / change) * fraction
+            reach = (lag + math.copysign(limit, change)) / change * fraction
             if reach <= 0.0:  # the walker is behind its gait already: it catches up first
                 self.transitions.append(Transition(walker.state.step, commanded, self.speed, self.orbit.step_length,
                                                    self.orbit.period, time.perf_counter() - start, "",
@@ -228,6 +233,7 @@ class SpeedFollower:
         self.transitions.append(transition)
         if orbit is not None:
             walker.retarget(orbit)
+            self._put_offs = 0
             self.cycle = as_cycle(orbit)
             self.orbit, self.speed, self.curvature = self.cycle[0], float(speed), curvature
             if curvature == 0.0:  # straight again: the next turn starts from a straight gait
@@ -235,6 +241,16 @@ class SpeedFollower:
                 self._solved = [*self._solved[-1:],
                                 ((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(self.bm, self.orbit.q_t)))]
         return transition
+
+    def _put_off(self, walker: Walker) -> None:
+        """The walker put off the last transition (its re-aim could not make it from the touchdown,
+        ``phases.impulsive``) and walks on at the gait it walked: aim from there, the next
+        transition ``PUT_OFF`` times as large."""
+        self.cycle = walker.cycle
+        self.orbit = self.cycle[0]
+        self.speed = self.orbit.step_length / self.orbit.period
+        self.curvature = 0.0 if math.isinf(self.orbit.turn_radius) else 1.0 / self.orbit.turn_radius
+        self._put_offs += 1
 
     def _momentum_limit(self, walker: Walker) -> float:
         """The largest change of the planned momentum about the feet line (kg m^2/s) a transition
