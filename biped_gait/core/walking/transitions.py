@@ -58,16 +58,13 @@ MAX_CURVATURE = 0.5  # 1/m: the default bound on the curvature (R >= 2 m; admiss
 SPEED_RULES = ("least_effort", "cadence")
 NEARER = (0.5, 0.25)  # the fractions of a transition tried when it cannot be reached
 MAX_PITCH = 0.05
-"""rad: a transition step changes the planned momentum about the feet line by at most what this
-touchdown pitch steers at the gait walked (its authority a + b c times it, ``steering``): 0.7 to
-0.75 kg m^2/s with the nine joints (14 to 15 per rad), whose ramps of 0.05 m/s per step ask up
-to 1.2; with the hips (3 to 11 per rad) 0.15 to 0.55, where their ramps ask up to 2.2. With 0.1
-rad the hips' walk at 0.9 m/s still fell in its second step (docs/model.md section 8.8)."""
-CATCH_UP = 2.0
-"""A transition step leaves the walker's momentum about the feet line at most this many times that
-bound from its new gait's (the walker lags behind a ramp; with the hips' authority a lag of three
-times the bound fell within three steps of a ramp from 0.9 m/s up); a walker further behind waits
-a step, no transition, and catches up."""
+"""rad: a transition step leaves the walker's momentum about the feet line (which no impulse
+changes) at most what this touchdown pitch steers away from its new gait's: the change of the
+planned momentum, less the lag the walker carries into the step contracted by its steering rate,
+within the authority a + b c (``steering``) times it. 0.7 to 0.75 kg m^2/s with the nine joints
+(14 to 15 per rad), whose ramps of 0.05 m/s per step ask up to 1.2; with the hips (3 to 11 per
+rad) 0.15 to 0.55, where their ramps ask up to 2.2. With 0.1 rad the hips' walk from the plan at
+0.9 m/s fell in its second step (docs/model.md section 8.8)."""
 MOMENTUM_SHRINKS = 3  # a transition shrunk at most this many times to keep within that bound
 SHRINK_MARGIN = 0.9  # each time to this fraction of the bound, in proportion to the change it asked
 PUT_OFF = 0.5  # a transition the walker put off: the next one this fraction of the way
