@@ -172,7 +172,9 @@ class SpeedFollower:
         if it is at them already, no command came, or the command is held). A transition that
         cannot be reached is replaced by the nearest one that can (``NEARER``); if none can, the
         follower holds its gait until the command changes: the transition is returned with its
-        ``failure``, which says so."""
+        ``failure``, which says so. A transition is shrunk to the momentum the walker's steering
+        follows in a step (``MAX_PITCH``); a walker too far behind its gait for any of it waits
+        (the transition returned with ``waited``, the gait unchanged)."""
         with self._lock:
             command = self._commanded
         if walker.state.aim.pending is None and walker.cycle[0] is not self.cycle[0]:
@@ -209,7 +211,7 @@ class SpeedFollower:
             if abs(lag - change) <= limit or shrunk == MOMENTUM_SHRINKS:
                 break
             # more momentum than the steering follows in a step: the part of the transition it can
-            reach = (lag + math.copysign(limit, change)) / change * fraction
+            reach = (lag + math.copysign(limit, change)) / change * fraction if change else 0.0
             if reach <= 0.0:  # the walker is behind its gait already: it catches up first
                 self.transitions.append(Transition(walker.state.step, commanded, self.speed, self.orbit.step_length,
                                                    self.orbit.period, time.perf_counter() - start, "",
