@@ -43,6 +43,7 @@ import numpy as np
 from ..gait.atlas import Atlas, Grid, NodeStatus
 from ..gait.configurations import boundary_configurations
 from ..dynamics.hybrid import HybridStep
+from ..dynamics.settings import DEFAULTS
 from .steering import reference
 
 SPEED_STEP = 0.01  # m/s: spacing of the least-effort table
@@ -112,10 +113,12 @@ def walkable_nodes(atlas: Atlas, alpha: float, hybrid: HybridStep, steps: int) -
     """Per (L, T) node of ``atlas``: admissible at the alpha slices around ``alpha`` (rad), with
     an open-loop spectral radius at most ``MAX_RADIUS``, at each its swing tip comes down
     faster than ``ARRIVAL_MARGIN`` at the touchdown (the step integrated from the node's qd(0)
-    and theta on a grid of ``steps``), and the steering's pitch authority is at least
+    and theta on a grid of ``steps``), and the steering's pitch authority (on the coarse grid of
+    ``DEFAULTS``) is at least
     ``MIN_AUTHORITY`` there and at every shorter period of its step length (the steerable side
     of the line where it vanishes)."""
     flow, mode, ends = hybrid.flow(steps), atlas.mode, boundary_configurations(hybrid.bm)
+    coarse = hybrid.flow(min(steps, DEFAULTS.coarse_steps))  # the authority's sensitivities: half the walk's cost
     out = np.ones(atlas.grid.shape[:2], dtype=bool)
     for k, _ in _alpha_slices(atlas, alpha):
         alpha_k = float(atlas.grid.alphas[k])
@@ -130,7 +133,7 @@ def walkable_nodes(atlas: Atlas, alpha: float, hybrid: HybridStep, steps: int) -
             qd_a = atlas.nodes["qd_a"][i, j, k]
             end = flow.propagate(q0, qd_a, period)
             out[i, j] = hybrid.samples.swing_tip_motion(end.q, end.qd)[1][0] < -ARRIVAL_MARGIN
-            if out[i, j] and reference(hybrid, flow, q0, q_t, qd_a, end.qd, period).authority < MIN_AUTHORITY:
+            if out[i, j] and reference(hybrid, coarse, q0, q_t, qd_a, end.qd, period).authority < MIN_AUTHORITY:
                 out[i, j], beyond[i] = False, True
     return out
 
