@@ -2,7 +2,8 @@
 full circle from ``turn_radius`` comes back to its start in the recorded /odom; /cmd_vel's
 angular.z turns the walk at the commanded yaw rate after its per-step ramp, a command beyond the
 envelope is clamped with a warning, and the envelope is latched on ~/velocity_envelope; the
-tutorial's turn under the default speed rule, at real time."""
+tutorial's turn under the default speed rule, at real time; and that turn, then silence: the walk
+slows to the slowest gait and walks on for 30 s of simulated time."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 from geometry_msgs.msg import Twist, Vector3
+from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -39,6 +41,11 @@ def planner_node(tmp_path_factory):
         yield proc
 
 
+def stamp(header) -> float:
+    """A header's stamp (s)."""
+    return header.stamp.sec + 1e-9 * header.stamp.nanosec
+
+
 def yaw(orientation) -> float:
     """The heading (rad) of a quaternion (a rotation about the vertical and small tilts)."""
     q = orientation
@@ -51,10 +58,10 @@ def turns(where) -> tuple[list[float], Callable[[float], float]]:
     [bag] = list((where / "bags").iterdir())
     topics = read_bag(bag)
     odom = [m for _, m in topics["/odom"]]
-    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in odom])
+    stamps = np.array([stamp(m.header) for m in odom])
     headings = np.unwrap([yaw(m.pose.pose.orientation) for m in odom])
     touchdowns = [m for _, m in topics["/gait_events"] if m.kind == GaitEvent.TOUCHDOWN]
-    return ([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in touchdowns],
+    return ([stamp(m.header) for m in touchdowns],
             lambda t: float(headings[np.argmin(np.abs(stamps - t))]))
 
 
@@ -160,3 +167,49 @@ def test_the_tutorials_turn_under_the_default_speed_rule(planner_node, tmp_path)
     steady = (heading_at(times[13]) - heading_at(times[7])) / (times[13] - times[7])  # three strides at 0.4 1/m
     assert steady == pytest.approx(0.4, rel=0.02)
     assert all(r <= 0.4 * 1.15 for r in rates[:4])  # no faster than the ramp allows
+
+
+def test_the_tutorials_turn_then_silence_walks_on_at_the_slowest_gait(planner_node, tmp_path):
+    """docs/tutorial.md section 5 with the hips, then the publisher stops: Twist(1.0, 0.4) for 7 s
+    of simulated time, then nothing: the timeout (0.5 s) takes it as 0, clamped to the envelope's
+    slowest gait; the walk straightens and slows there through transition steps (more of them
+    where the steering cannot follow a change in one) and walks on without a fall for 30 s of
+    simulated time after the silence, at the slowest speed. (It fell about 3 s after the
+    silence, in step 40, when the slowest gaits were at T = 0.65 s, where the steering's pitch
+    has no authority over the momentum about the feet line.) Paced at twice real time."""
+    side = ClientSide("tutorial_silence_client")
+    walk_times: list[float] = []  # s: the simulated time of each /odom received
+    try:
+        node = side.node
+        pub = node.create_publisher(Twist, "/cmd_vel", 10)
+        node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+        node.create_subscription(Odometry, "/odom", lambda m: walk_times.append(stamp(m.header)), 100)
+        timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=1.0), angular=Vector3(z=0.4))))
+        proc = start_simulator(tmp_path, PLANNER, "steps:=100", "exit_when_done:=true", "params:=aoustin2013-hips",
+                               "arm_amplitude:=0.349", "wait_for_subscribers:=1", "real_time_factor:=2.0",
+                               "publish_rate:=50.0")
+        side.wait(lambda: proc.poll() is not None or bool(walk_times) and walk_times[-1] - walk_times[0] >= 7.0, 120.0)
+        timer.cancel()
+        silence = walk_times[-1]  # s: the last command's simulated time, to a sample
+        side.wait(lambda: proc.poll() is not None, 400.0)
+    finally:
+        side.close()
+    log = (tmp_path / "biped-gait-simulator.log").read_text()
+    assert proc.returncode == 0, log
+    assert "no /cmd_vel for" in log and "no transition" not in log, log
+    [bag] = list((tmp_path / "bags").iterdir())
+    topics = read_bag(bag)
+    events = [m for _, m in topics["/gait_events"]]
+    assert not [e for e in events if e.kind == GaitEvent.FALL]
+    times = [stamp(e.header) for e in events if e.kind == GaitEvent.TOUCHDOWN]
+    [(_, envelope)] = topics["/biped_gait_simulator/velocity_envelope"]
+    odom = [m for _, m in topics["/odom"]]
+    stamps = np.array([stamp(m.header) for m in odom])
+    where = np.array([(m.pose.pose.position.x, m.pose.pose.position.y) for m in odom])
+    at = lambda t: where[np.argmin(np.abs(stamps - t))]  # noqa: E731
+    speed = float(np.linalg.norm(at(times[-1]) - at(times[-7])) / (times[-1] - times[-7]))  # three straight strides
+    print(f"\n{len(times)} steps, {times[-1] - silence:.1f} s of simulated time after the last command, no fall; "
+          f"the last three strides at {speed:.4f} m/s (the envelope's slowest {envelope.min_linear_x:.3f} m/s)")
+    assert len(times) == 100 and times[-1] - silence >= 30.0
+    # /odom at 50 Hz: each end of the three strides (2.5 s) within 0.01 s, 0.8 % of the speed
+    assert speed == pytest.approx(envelope.min_linear_x, rel=0.02)

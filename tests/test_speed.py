@@ -87,8 +87,9 @@ def test_a_gait_whose_foot_comes_up_to_the_touchdown_is_neither_admissible_nor_w
 
 
 def test_the_follower_walks_a_ramp_of_speeds(atlas, walkable, planner):
-    """From the rule's slowest to its fastest gait and back, 0.05 m/s per step at most: no fall,
-    two steps after the last transition at the commanded speed (stance-foot advance over the
+    """From the rule's slowest to its fastest gait and back, 0.05 m/s per step at most (less where the
+    planned momentum about the feet line changes more than the steering follows): no fall,
+    three steps after the last transition at the commanded speed (stance-foot advance over the
     step's duration within 2 %; on the orbit, eight steps later, within 1e-5); the CPU time of each transition (the
     gait's orbit, then the transition step: re-aim, impulses, integration) is printed, not asserted (a figure of
     the machine, not of the code)."""
@@ -98,8 +99,8 @@ def test_the_follower_walks_a_ramp_of_speeds(atlas, walkable, planner):
     orbit = PlannedOrbit.of(gait)
     walker = Walker(planner.hybrid, orbit, rate=50.0, momentum_rate=0.1)
     follower = SpeedFollower(planner.model, rule, orbit, DEFAULTS, atlas)
-    speeds = [rule.low] * 2 + [rule.high] * 12 + [rule.low] * 18
-    cpu, measured = [], []
+    speeds = [rule.low] * 2 + [rule.high] * 20 + [rule.low] * 24
+    cpu, measured, last = [], [], {}
     for k, command in enumerate(speeds):
         follower.command(command)
         start = time.process_time()
@@ -109,12 +110,14 @@ def test_the_follower_walks_a_ramp_of_speeds(atlas, walkable, planner):
         if transition is not None:
             assert not transition.failure
             cpu.append(time.process_time() - start)
+            if not transition.waited:
+                last[command] = k
         assert outcome.touchdown is not None, outcome.fall
         measured.append((command, follower.speed, (walker.state.stance_foot[0] - x) / outcome.touchdown.t_step))
     print(f"\ntransitions: {len(cpu)}, CPU time per transition step: median {1e3 * np.median(cpu):.1f} ms, "
           f"max {1e3 * max(cpu):.1f} ms; speeds per step (m/s): {' '.join(f'{m[2]:.3f}' for m in measured)}")
-    # Two steps after its last transition the walker is at the speed: up, then down.
-    for k in (13, 25):
-        command, aimed, speed = measured[k]
+    # Three steps after its last transition the walker is at the speed: up, then down.
+    for command in (rule.high, rule.low):
+        _, aimed, speed = measured[last[command] + 3]
         assert aimed == command and speed == pytest.approx(command, rel=0.02)
     assert measured[-1][2] == pytest.approx(rule.low, rel=1e-5)  # on the orbit: the error shrinks 10-fold per step

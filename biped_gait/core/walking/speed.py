@@ -16,8 +16,12 @@ advances L in T. Two rules pick (L, T) for a speed, at the walk's arm amplitude 
   L range (0.25 to 0.65 m, where the default sets have admissible gaits for T >= 0.425 s).
 
 A node is walkable (``walkable_nodes``) if the atlas calls it admissible, its open-loop
-spectral radius (the Floquet multipliers, ``stability``) is at most ``MAX_RADIUS``, and its swing
-foot comes down onto the ground at the touchdown, vertical velocity below -``ARRIVAL_MARGIN``.
+spectral radius (the Floquet multipliers, ``stability``) is at most ``MAX_RADIUS``, its swing
+foot comes down onto the ground at the touchdown, vertical velocity below -``ARRIVAL_MARGIN``,
+and the walker's momentum steering can steer there: its pitch authority a + b c is at least
+``MIN_AUTHORITY``, at this period and every shorter one of the step length (with the hips the
+authority vanishes at T = 0.55 to 0.62 s, where the least effort per metre would walk the slow
+speeds: every walk that slowed down fell there).
 Without the bound on the radius the least effort per metre lies at long periods (0.55 to 0.6 s),
 where a gait amplifies a perturbation 1e4 to 1e6 times per step: the walker's transition and
 re-aim problems there are so ill-conditioned that they fail within a few steps. And the
@@ -39,12 +43,20 @@ import numpy as np
 from ..gait.atlas import Atlas, Grid, NodeStatus
 from ..gait.configurations import boundary_configurations
 from ..dynamics.hybrid import HybridStep
+from ..dynamics.settings import DEFAULTS
+from .steering import reference
 
 SPEED_STEP = 0.01  # m/s: spacing of the least-effort table
 PERIOD_STEP = 0.0025  # s: spacing of the periods tried along each speed line
 MAX_SLOPE = 0.25  # s per m/s: the least-effort period's largest change with the speed
 MAX_RADIUS = 1000.0  # the largest open-loop spectral radius of a walkable gait
 ARRIVAL_MARGIN = 0.005  # m/s: a walkable gait's swing tip comes down at least this fast at the touchdown
+MIN_AUTHORITY = 3.0
+"""kg m^2/s per rad: a walkable gait's steering authority a + b c at least (``steering``), on the
+short-period side of the line where it vanishes: there the steered re-aim is singular and the
+walker falls (the hips' walk at 0.6 m/s fell at T = 0.62 s, a + b c = -1, and walked through
+1.4). With the nine joints it is 14 to 15 over the walkable gaits; with the hips it falls from
+7 to 11 at T = 0.3 s through 0 at T = 0.55 to 0.62 s (docs/model.md section 8.8)."""
 
 
 @dataclass(frozen=True)
@@ -99,22 +111,30 @@ def effort_surface(atlas: Atlas, alpha: float, walkable: np.ndarray) -> np.ndarr
 
 def walkable_nodes(atlas: Atlas, alpha: float, hybrid: HybridStep, steps: int) -> np.ndarray:
     """Per (L, T) node of ``atlas``: admissible at the alpha slices around ``alpha`` (rad), with
-    an open-loop spectral radius at most ``MAX_RADIUS``, and at each its swing tip comes down
+    an open-loop spectral radius at most ``MAX_RADIUS``, at each its swing tip comes down
     faster than ``ARRIVAL_MARGIN`` at the touchdown (the step integrated from the node's qd(0)
-    and theta on a grid of ``steps``)."""
+    and theta on a grid of ``steps``), and the steering's pitch authority (on the coarse grid of
+    ``DEFAULTS``) is at least
+    ``MIN_AUTHORITY`` there and at every shorter period of its step length (the steerable side
+    of the line where it vanishes)."""
     flow, mode, ends = hybrid.flow(steps), atlas.mode, boundary_configurations(hybrid.bm)
+    coarse = hybrid.flow(min(steps, DEFAULTS.coarse_steps))  # the authority's sensitivities: half the walk's cost
     out = np.ones(atlas.grid.shape[:2], dtype=bool)
     for k, _ in _alpha_slices(atlas, alpha):
         alpha_k = float(atlas.grid.alphas[k])
-        for i, j in np.ndindex(*out.shape):
-            if not (out[i, j] and atlas.nodes["status"][i, j, k] == NodeStatus.ADMISSIBLE
+        beyond = np.zeros(out.shape[0], dtype=bool)  # per step length: a shorter period lost the authority
+        for i, j in np.ndindex(*out.shape):  # the periods in increasing order for each step length
+            if not (out[i, j] and not beyond[i] and atlas.nodes["status"][i, j, k] == NodeStatus.ADMISSIBLE
                     and atlas.nodes["spectral_radius"][i, j, k] <= MAX_RADIUS):
                 out[i, j] = False
                 continue
             length, period = float(atlas.grid.step_lengths[i]), float(atlas.grid.periods[j])
-            q0, _ = ends(length, alpha_k, mode, float(atlas.nodes["theta"][i, j, k]))
-            end = flow.propagate(q0, atlas.nodes["qd_a"][i, j, k], period)
+            q0, q_t = ends(length, alpha_k, mode, float(atlas.nodes["theta"][i, j, k]))
+            qd_a = atlas.nodes["qd_a"][i, j, k]
+            end = flow.propagate(q0, qd_a, period)
             out[i, j] = hybrid.samples.swing_tip_motion(end.q, end.qd)[1][0] < -ARRIVAL_MARGIN
+            if out[i, j] and reference(hybrid, coarse, q0, q_t, qd_a, end.qd, period).authority < MIN_AUTHORITY:
+                out[i, j], beyond[i] = False, True
     return out
 
 

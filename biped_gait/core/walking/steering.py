@@ -106,6 +106,13 @@ class SteeringReference:
     start_theta: float
     start_momentum: float
 
+    @property
+    def authority(self) -> float:
+        """a + b c (kg m^2/s per rad): how much the next touchdown's pitch, held there over the
+        following step, moves the momentum error s; the law's diagonal. Where it vanishes the
+        pitch cannot steer the momentum (docs/model.md section 8.8)."""
+        return float(self.jacobian[-1, -1])
+
     def error(self, bm: BipedModel, q_pre: np.ndarray, momentum: float) -> float:
         """s (kg m^2/s) of a touchdown at ``q_pre`` with momentum ``momentum`` about the feet line
         that starts this step."""
@@ -116,6 +123,12 @@ def momentum_row(hybrid: HybridStep, q: np.ndarray) -> np.ndarray:
     """The single-support part of z_d^T D_e at the double-support configuration ``q``: qd (rad/s)
     -> momentum about the foot-to-foot line (kg m^2/s)."""
     return hybrid.impact(q).momentum_row[hybrid.bm.ds_of_single]
+
+
+def planned_momentum(hybrid: HybridStep, orbit) -> float:
+    """The momentum about the foot-to-foot line at ``orbit``'s touchdown (kg m^2/s; a
+    ``PlannedOrbit``)."""
+    return float(momentum_row(hybrid, np.asarray(orbit.q_t)) @ np.asarray(orbit.qd_b))
 
 
 def _theta_derivative(f, q: np.ndarray, direction: np.ndarray) -> np.ndarray:

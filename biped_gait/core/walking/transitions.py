@@ -17,7 +17,10 @@ straight gait), continued in the curvature from it when the solve leaves its bra
 whose swing foot would come up to the touchdown from under the ground (``speed.walkable_nodes``)
 is refused.
 
-A transition that cannot be reached (not solved, or not admissible) is replaced by the nearest
+A transition whose gait's momentum about the feet line (which no impulse changes) differs from
+the walked gait's by more than the walker's momentum steering follows in a step (``MAX_PITCH``
+times its authority) is shrunk in proportion, so that the change is spread over more steps. A
+transition that cannot be reached (not solved, or not admissible) is replaced by the nearest
 one that can: the gaits a half and a quarter of the way to it. If none can, the follower holds
 the gait it walks and says so once, and tries again only when the command changes: a gait is
 never retried step after step.
@@ -42,8 +45,8 @@ from ..gait.atlas import Atlas, AtlasError, atlas_path
 from ..gait.bvp import solve_bvp
 from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
-from .speed import MAX_SLOPE, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
-from .steering import pelvis_pitch
+from .speed import MAX_SLOPE, MIN_AUTHORITY, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
+from .steering import pelvis_pitch, planned_momentum
 from .orbit import Cycle, PlannedOrbit, as_cycle
 from .runner import Walker
 from ..model.biped import BipedModel
@@ -54,6 +57,17 @@ MAX_CURVATURE = 0.5  # 1/m: the default bound on the curvature (R >= 2 m; admiss
 # default gait reach about 1 / 1.1 m, docs/results.md)
 SPEED_RULES = ("least_effort", "cadence")
 NEARER = (0.5, 0.25)  # the fractions of a transition tried when it cannot be reached
+MAX_PITCH = 0.05
+"""rad: a transition step leaves the walker's momentum about the feet line (which no impulse
+changes) at most what this touchdown pitch steers away from its new gait's: the change of the
+planned momentum, less the lag the walker carries into the step contracted by its steering rate,
+within the authority a + b c (``steering``) times it. 0.7 to 0.75 kg m^2/s with the nine joints
+(14 to 15 per rad), whose ramps of 0.05 m/s per step ask up to 1.2; with the hips (3 to 11 per
+rad) 0.15 to 0.55, where their ramps ask up to 2.2. With 0.1 rad the hips' walk from the plan at
+0.9 m/s fell in its second step (docs/model.md section 8.8)."""
+MOMENTUM_SHRINKS = 3  # a transition shrunk at most this many times to keep within that bound
+SHRINK_MARGIN = 0.9  # each time to this fraction of the bound, in proportion to the change it asked
+PUT_OFF = 0.5  # a transition the walker put off: the next one this fraction of the way
 
 
 @dataclass(frozen=True)
@@ -70,6 +84,7 @@ class Transition:
     solve_seconds: float
     failure: str = ""
     curvature: float = 0.0
+    waited: bool = False  # no transition this step: the walker's momentum is still catching up with its gait
 
 
 @dataclass(frozen=True)
@@ -109,7 +124,7 @@ class SpeedFollower:
         self.max_curvature = max_curvature if turning is not None else 0.0
         self.max_curvature_change = max_curvature_change
         cycle = as_cycle(orbit)
-        self.orbit = cycle[0]
+        self.orbit, self.cycle = cycle[0], cycle  # the gait aimed at: its first step, its steps
         self.speed = self.orbit.step_length / self.orbit.period  # of the gait aimed at (m/s)
         self.curvature = 0.0 if math.isinf(self.orbit.turn_radius) else 1.0 / self.orbit.turn_radius  # 1/m
         # (L m, T s) and warm start (qd(0), theta) of the last two straight gaits aimed at, oldest first
@@ -119,6 +134,7 @@ class SpeedFollower:
         self._commanded: tuple[float, float] | None = None  # (speed m/s, curvature 1/m); None: walk the plan
         self._held: tuple[float, float] | None = None  # a command none of whose transitions could be reached
         self._lock = threading.Lock()
+        self._put_offs = 0  # transitions the walker put off since the last it made
         self.transitions: list[Transition] = []
 
     @property
@@ -156,9 +172,13 @@ class SpeedFollower:
         if it is at them already, no command came, or the command is held). A transition that
         cannot be reached is replaced by the nearest one that can (``NEARER``); if none can, the
         follower holds its gait until the command changes: the transition is returned with its
-        ``failure``, which says so."""
+        ``failure``, which says so. A transition is shrunk to the momentum the walker's steering
+        follows in a step (``MAX_PITCH``); a walker too far behind its gait for any of it waits
+        (the transition returned with ``waited``, the gait unchanged)."""
         with self._lock:
             command = self._commanded
+        if walker.state.aim.pending is None and walker.cycle[0] is not self.cycle[0]:
+            self._put_off(walker)
         if command is None or command == self._held:
             return None
         commanded, aimed = command
@@ -171,7 +191,12 @@ class SpeedFollower:
         full = current + np.clip(goal - current, -bounds, bounds)
         start = time.perf_counter()
         failures = []
-        for fraction in (1.0, *NEARER):
+        fractions, shrunk = [PUT_OFF ** self._put_offs * f for f in (1.0, *NEARER)], 0
+        limit, carried = self._momentum_limit(walker), self._carried_momentum(walker)
+        rate = walker.state.aim.step.steering.rate if walker.state.aim.step.steering is not None else 1.0
+        walked = planned_momentum(walker.hybrid, self.orbit)
+        while fractions:
+            fraction = fractions.pop(0)
             speed, period, curvature = current + fraction * (full - current)
             curvature = 0.0 if abs(curvature) < 1e-12 else float(curvature)
             step_length = float(speed * period)
@@ -179,9 +204,22 @@ class SpeedFollower:
                 orbit, failure = self._orbit(walker, step_length, float(period))
             else:
                 orbit, failure = self._stride_cycle(walker, step_length, float(period), curvature)
-            if orbit is not None:
+            if orbit is None:
+                failures.append(failure)
+                continue
+            change, lag = planned_momentum(walker.hybrid, as_cycle(orbit)[0]) - walked, rate * (carried - walked)
+            if abs(lag - change) <= limit or shrunk == MOMENTUM_SHRINKS:
                 break
-            failures.append(failure)
+            # more momentum than the steering follows in a step: the part of the transition it can
+            reach = (lag + math.copysign(limit, change)) / change * fraction if change else 0.0
+            if reach <= 0.0:  # the walker is behind its gait already: it catches up first
+                self.transitions.append(Transition(walker.state.step, commanded, self.speed, self.orbit.step_length,
+                                                   self.orbit.period, time.perf_counter() - start, "",
+                                                   self.curvature, waited=True))
+                return self.transitions[-1]
+            shrunk += 1
+            fractions.insert(0, min(fraction, reach) * SHRINK_MARGIN)
+            orbit = None
         if orbit is None:
             self._held = command
             speed, period, curvature = current
@@ -194,12 +232,41 @@ class SpeedFollower:
         self.transitions.append(transition)
         if orbit is not None:
             walker.retarget(orbit)
-            self.orbit, self.speed, self.curvature = as_cycle(orbit)[0], float(speed), curvature
+            self._put_offs = 0
+            self.cycle = as_cycle(orbit)
+            self.orbit, self.speed, self.curvature = self.cycle[0], float(speed), curvature
             if curvature == 0.0:  # straight again: the next turn starts from a straight gait
                 self._stride = None
                 self._solved = [*self._solved[-1:],
                                 ((self.orbit.step_length, self.orbit.period), (self.orbit.qd_a, pelvis_pitch(self.bm, self.orbit.q_t)))]
         return transition
+
+    def _put_off(self, walker: Walker) -> None:
+        """The walker put off the last transition (its re-aim could not make it from the touchdown,
+        ``phases.impulsive``) and walks on at the gait it walked: aim from there, the next
+        transition ``PUT_OFF`` times as large."""
+        self.cycle = walker.cycle
+        self.orbit = self.cycle[0]
+        self.speed = self.orbit.step_length / self.orbit.period
+        self.curvature = 0.0 if math.isinf(self.orbit.turn_radius) else 1.0 / self.orbit.turn_radius
+        self._put_offs += 1
+
+    def _momentum_limit(self, walker: Walker) -> float:
+        """The largest change of the planned momentum about the feet line (kg m^2/s) a transition
+        step may ask of ``walker``: what a touchdown pitch of ``MAX_PITCH`` steers at the gait it
+        walks (the smallest authority of its steps); inf without momentum steering."""
+        steerings = [step.steering for step in walker.state.aim.steps if step.steering is not None]
+        if not steerings:
+            return math.inf
+        return MAX_PITCH * max(min(steering.ref.authority for steering in steerings), MIN_AUTHORITY)
+
+    def _carried_momentum(self, walker: Walker) -> float:
+        """The momentum about the feet line (kg m^2/s) the step ``walker`` begins carries from its
+        touchdown, which no impulse changes: the closure's gain at that touchdown times the step's
+        initial velocity."""
+        hybrid, state = walker.hybrid, walker.state
+        gain, _ = hybrid.impact(hybrid.exchange.configuration(state.q)).closure_gradients()
+        return float(gain @ state.qd)
 
     def _stride_cycle(self, walker: Walker, step_length: float, period: float,
                       curvature: float) -> tuple[Cycle | None, str]:

@@ -74,12 +74,42 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
     state by the effort LP, then the leg exchange. The next step's start and the touchdown report;
     ``Fall`` if no re-aim or no impulses reach it."""
     hybrid, feedback, bm, s = ctx.hybrid, ctx.feedback, ctx.hybrid.bm, state
-    aim = s.aim
-    q_t, qd_b = np.asarray(aim.orbit.q_t), np.asarray(aim.orbit.qd_b)
+    q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
     error = max(float(np.max(np.abs(q_td - q_t))), float(np.max(np.abs(qd_td - qd_b))))
-    foot_line_moment = aim.orbit.foot_line_moment  # the plan's, of this double support
     side = other_side(s.stance_side)
-    aim = feedback.advanced(aim, side)  # the next step's plan
+    try:
+        aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step, feedback.advanced(s.aim, side), error)
+    except Fall:
+        if s.aim.pending is None:
+            raise
+        # a transition step the re-aim cannot make from this touchdown: put off, the walked gait aimed at again
+        aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step,
+                                                        feedback.advanced(replace(s.aim, pending=None), side), error)
+    # The new stance foot's world position, then the mirror: the next step in model coordinates.
+    new_foot = s.stance_foot + s.axes @ bm.swing_tip(q_td)
+    new_foot[2] = 0.0
+    exchange = hybrid.exchange
+    following = WalkState(q=exchange.configuration(q_td), qd=exchange.velocity(q_td, xd_a), aim=aim, step=s.step + 1,
+                          t=s.t + t_step, stance_side=side, stance_foot=new_foot,
+                          heading=next_heading(s.heading, side, exchange.heading(q_td)))
+    touchdown = Touchdown(
+        step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
+        W=sol.W, state_error=error, velocity_miss=abs(miss),
+        correction=float(np.max(np.abs(xd_a[3:] - planned.xd_a[3:]))), equation_residual=sol.equation_residual,
+        next_stance_side=side,
+    )
+    return following, touchdown
+
+
+def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.ndarray, t_step: float, aim,
+                    error: float):
+    """The re-aim towards ``aim`` (the next step's) and the impulses from the touchdown (``q_td``,
+    ``qd_td``) ``t_step`` s into ``s``'s step, in closure rounds with legs leaning: the aim with the
+    re-aim's duration, the post-impact velocity, the impulses, the impact problem planned towards
+    the plan's velocity and its velocity miss. ``Fall`` if no re-aim or no impulses reach it."""
+    hybrid, feedback, bm = ctx.hybrid, ctx.feedback, ctx.hybrid.bm
+    q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
+    foot_line_moment = s.aim.orbit.foot_line_moment  # the plan's, of this double support
     impact = hybrid.impact(q_td)
     planned = impact.problem(qd_td, np.asarray(aim.orbit.qd_a))
     reachable, miss = planned.reachable()
@@ -109,20 +139,7 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
         if not feedback.reaim or abs(done - foot_line_moment) <= feedback.settings.tolerance:
             break
         foot_line_moment = done
-    # The new stance foot's world position, then the mirror: the next step in model coordinates.
-    new_foot = s.stance_foot + s.axes @ bm.swing_tip(q_td)
-    new_foot[2] = 0.0
-    exchange = hybrid.exchange
-    following = WalkState(q=exchange.configuration(q_td), qd=exchange.velocity(q_td, xd_a), aim=aim, step=s.step + 1,
-                          t=s.t + t_step, stance_side=side, stance_foot=new_foot,
-                          heading=next_heading(s.heading, side, exchange.heading(q_td)))
-    touchdown = Touchdown(
-        step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
-        W=sol.W, state_error=error, velocity_miss=abs(miss),
-        correction=float(np.max(np.abs(xd_a[3:] - planned.xd_a[3:]))), equation_residual=sol.equation_residual,
-        next_stance_side=side,
-    )
-    return following, touchdown
+    return aim, xd_a, sol, planned, miss
 
 
 def why_no_impulses(problem, orbit: PlannedOrbit) -> str:
