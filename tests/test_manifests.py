@@ -26,7 +26,7 @@ LIBRARIES = {
     "osqp": ("python3-osqp-pip", "osqp"), "mcap": ("python3-mcap-pip", "mcap"),
     "mcap_ros2": ("python3-mcap-ros2-support-pip", "mcap-ros2-support"),
     "distributed": ("python3-distributed-pip", "distributed"), "foxglove": ("python3-foxglove-sdk-pip", "foxglove-sdk"),
-    "mujoco": ("python3-mujoco-pip", "mujoco"),
+    "mujoco": ("python3-mujoco-pip", "mujoco"), "casadi": ("python3-casadi-pip", "casadi"),
 }
 
 
