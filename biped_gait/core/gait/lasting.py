@@ -10,27 +10,31 @@ configuration q_T):
    both tips fixed, both reactions in their pyramids with non-negative normal force, every
    |Gamma_j| within the joint table's effort, the joints within their ranges;
 4. I^+: impulsive joint torques at lift-off, the new tip held, the old one leaving with the
-   gait's velocity (paper eq. 10), onto the next step's start Xd^a.
+   velocity the next step starts with (paper eq. 10);
+5. the next ballistic single support, from the lift-off posture to the touchdown posture in T.
 
-The lift-off configuration is the touchdown's, q_T (project choice): the gait's ballistic single
-support, its BVP and its closure stay the paper's, so the double support is an optimal-control
-problem between two known states, and d = 0 with the old tip leaving at the impact is the
-paper's gait. (The feet-line momentum, which the impulses cannot change, changes over the phase
-by m g times the integral of the centre of mass's distance from the feet line; the closure of the
-single support makes the two ends' momenta equal, so the phase must return it.)
+The touchdown posture is the d = 0 gait's q_T; the lift-off posture is free on the closed chain
+(project choice): the impulses cannot change the momentum about the feet line, and over the phase
+only gravity does (m g times the integral of the centre of mass's distance from the line), so the
+body rolls over the line and cannot be back at q_T. The next single support therefore starts from
+the lift-off posture (legs exchanged) and must reach q_T in T: its start velocity is an unknown and
+the planner's shooting flow, with its exact sensitivities, is a constraint of the same program
+(``flow_function``). The kinds of program (``KINDS``): ``periodic`` that cycle; ``limit`` its
+d -> 0+ limit (the impulses and the held impact, the held velocity one the closed chain can carry);
+``stop`` from the gait's touchdown to rest in a standing posture on the same feet; ``start`` from
+rest there onto the gait (a double support, then I^+).
 
 The phase is transcribed by Hermite-Simpson collocation (compressed form) in inverse-dynamics
 form: q, qd, qdd, Gamma and the new tip's reaction at every node and midpoint, the equations of
 motion as equality constraints at each, the new tip's held position and velocity at the nodes;
 the old tip's reaction is the double-support model's root rows. The impulses' equations are linear
-at q_T. The whole is one nonlinear program solved by IPOPT (CasADi's, with MUMPS) with exact
-derivatives from ``core/dynamics/symbolic.py``. The effort minimized is
+at q_T (I^+'s, at the lift-off posture, are not). The whole is one nonlinear program solved by
+IPOPT (CasADi's, with MUMPS) with exact first derivatives from ``core/dynamics/symbolic.py`` and
+the flow's sensitivities. The effort minimized is
 
     E = Sum |I^-| + integral Sum |Gamma_j| dt + Sum |I^+|            (N m s, ``l1``)
 
-or E2 = Sum (I^-)^2 + integral Gamma' Gamma dt + Sum (I^+)^2 (``l2``). With d = 0 the program
-keeps its impulses and the held impact and has no phase between: its optimum is E(0+), the limit
-of E(d) as d -> 0.
+or E2 = Sum (I^-)^2 + integral Gamma' Gamma dt + Sum (I^+)^2 (``l2``).
 
 Units SI, rad; forces N, impulses N s, joint impulses N m s.
 """
@@ -45,9 +49,9 @@ from functools import cached_property
 import casadi as ca
 import numpy as np
 
-from ..dynamics.symbolic import SymbolicModel
 from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.flow import BallisticFlow
+from ..dynamics.symbolic import SymbolicModel
 from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
 from .flow_function import CoupledConstraints, FlowFunction
 
