@@ -38,8 +38,8 @@ def run(args: argparse.Namespace) -> int:
         result, drawn = views.to_dict(gait), gait
     admissible = gait.admissible
     if lasting is not None and gait.usable:
-        support = planner.lasting.periodic(gait, lasting)
         limit = planner.lasting.limit(gait, lasting.effort)
+        support = planner.lasting.periodic(gait, lasting, limit=limit)
         print(lasting_summary(support, limit.effort_total, gait.W))
         result["double_support_phase"] = views.double_support_phase(support, limit.effort_total)
         admissible = admissible and support.success

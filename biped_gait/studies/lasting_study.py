@@ -29,7 +29,7 @@ ALPHA_DURATIONS = (0.1,)
 def _row(planner: GaitPlanner, request: GaitRequest, duration: float) -> dict:
     gait = planner.plan(request)
     limit = planner.lasting.limit(gait)
-    support = planner.lasting.periodic(gait, LastingRequest(duration))
+    support = planner.lasting.periodic(gait, LastingRequest(duration), limit=limit)
     return {"L": request.step_length, "T": request.period, "alpha_deg": math.degrees(request.arm_amplitude),
             "mode": request.mode if isinstance(request.mode, str) else request.mode.value, "d": duration,
             "W": gait.W, "E0": limit.effort_total, "E": support.effort_total if support.success else None,

@@ -19,7 +19,8 @@ from ..dynamics.flow import BallisticFlow
 
 
 class _Evaluation:
-    """The flow at the last (q0, qd0) asked, with its sensitivities once they were asked for."""
+    """The flow over ``period`` at the last (q0, qd0) asked, with its sensitivities once they were
+    asked for (the period is part of what is kept: set it before asking)."""
 
     def __init__(self, flow: BallisticFlow, period: float) -> None:
         self.flow, self.period = flow, period
@@ -28,7 +29,7 @@ class _Evaluation:
         self.jacobian: np.ndarray | None = None
 
     def at(self, start: np.ndarray, with_jacobian: bool) -> None:
-        key = start.tobytes()
+        key = start.tobytes() + np.float64(self.period).tobytes()
         if key == self.key and (self.jacobian is not None or not with_jacobian):
             return
         n = len(start) // 2

@@ -51,6 +51,7 @@ import numpy as np
 
 from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.flow import BallisticFlow
+from ..dynamics.impulses import CONE_SIDES
 from ..dynamics.symbolic import SymbolicModel
 from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
 from .flow_function import CoupledConstraints, FlowFunction
@@ -60,7 +61,6 @@ from .flow_function import CoupledConstraints, FlowFunction
 # iterations; infeasibility detected) where on 10 it does (about 120 and 330 iterations).
 INTERVALS = {"periodic": 20, "stop": 10, "start": 10, "limit": 0}
 TOLERANCE = 1e-9  # IPOPT's tolerance on the scaled KKT conditions and on the constraint violation
-PYRAMID_SIDES = 8  # the friction cone's inscribed pyramid, as the impulses' LP (docs/model.md 4.4)
 MAX_ITERATIONS = 1000  # the solves that converge take 200 to 600
 # The unknowns' magnitudes (``_Program.var``); forces and impulses scale with the weight.
 TORQUE = 100.0  # N m
@@ -142,12 +142,12 @@ class LastingSupport:
     @property
     def friction_used(self) -> float:
         """The largest |F_xy| / F_z of both tips over the phase and of the held impact's impulses;
-        a reaction within the solver's tolerance of zero (``NEGLIGIBLE`` of the weight, or of its
-        impulse over 0.1 s) needs none: its direction is rounding's."""
-        weight = float(np.max(np.abs(self.contact_forces[..., 2]), initial=0.0)) or 1.0
+        a reaction within the solver's tolerance of zero (``NEGLIGIBLE`` of the phase's largest
+        normal force, or of its impulse over 0.1 s) needs none: its direction is rounding's."""
+        largest = float(np.max(np.abs(self.contact_forces[..., 2]), initial=0.0)) or 1.0
         ratios = [0.0]
-        for forces, floor in ((self.contact_forces.reshape(-1, 3), NEGLIGIBLE * weight),
-                              (self.held_impact_impulses, NEGLIGIBLE * weight * IMPULSE_TIME)):
+        for forces, floor in ((self.contact_forces.reshape(-1, 3), NEGLIGIBLE * largest),
+                              (self.held_impact_impulses, NEGLIGIBLE * largest * IMPULSE_TIME)):
             for f in forces:
                 if np.linalg.norm(f) > floor:
                     ratios.append(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else math.inf)
@@ -164,6 +164,7 @@ class _Program:
         self.size = 0
         self.where: dict[str, int] = {}  # the first offset of each unknown's name
         self.rows: list[str] = []  # what each constraint row is
+        self.last_node_q = 0  # the offset of the phase's last node's q (``LastingProgram._phase``)
 
     def var(self, name: str, size: int, lower=-np.inf, upper=np.inf, scale: float = 1.0):
         """An unknown of ``size``; the program holds it divided by ``scale``, its magnitude (IPOPT
@@ -229,16 +230,13 @@ class LastingProgram:
         x[self.at.tolist()] = q
         return x
 
-    def _tip(self, x):
-        return self.sym.frame_position(x, SWING_TIP)
-
     def _build(self) -> None:
         nq, nx, na, n_int = self.nq, self.nx, self.na, self.intervals
         at, rows = self.at.tolist(), self.rows
         periodic = self.kind == "periodic"
         arrives, departs = self.kind in ("stop", "limit", "periodic"), self.kind in ("start", "limit", "periodic")
         xs, vs, a_s = ca.SX.sym("x", nx), ca.SX.sym("v", nx), ca.SX.sym("a", nx)
-        tip = self._tip(xs)
+        tip = self.sym.frame_position(xs, SWING_TIP)
         self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs),
                                                ca.jacobian(self.sym.frame_position(xs, STANCE_TIP), xs)])
         self.f_rnea = ca.Function("rnea", [xs, vs, a_s], [self.sym.rnea(xs, vs, a_s)])
@@ -255,11 +253,11 @@ class LastingProgram:
         b = ca.DM(b)
         nlp = _Program()
         mu = self.friction
-        angles = np.arange(PYRAMID_SIDES) * 2 * np.pi / PYRAMID_SIDES
+        angles = np.arange(CONE_SIDES) * 2 * np.pi / CONE_SIDES  # the impulses' inscribed pyramid (section 4.4)
         pyramid = None
         if math.isfinite(mu):
             pyramid = ca.DM(np.column_stack([np.cos(angles), np.sin(angles),
-                                             np.full(PYRAMID_SIDES, -mu * np.cos(np.pi / PYRAMID_SIDES))]))
+                                             np.full(CONE_SIDES, -mu * np.cos(np.pi / CONE_SIDES))]))
 
         def press(force, what):  # a reaction that presses, within the floor's pyramid
             nlp.le(-force[2], f"{what} presses")
@@ -506,7 +504,6 @@ class LastingProgram:
         (with ``impulsive``)."""
         if self.kind == "periodic":
             self.flow_function.evaluation.period = boundary.period
-            self.flow_function.evaluation.key = None
         params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a, [duration]])
         args = dict(p=params, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg, ubg=self.ubg)
         solver = self.solver
@@ -590,15 +587,17 @@ class LastingPlanner:
         """The limit d -> 0+: I^-, the held impact pressing, I^+ (its effort is E(0+))."""
         return self.program("limit", effort).solve(self.boundary(gait), 0.0)
 
-    def periodic(self, gait, request: LastingRequest, start: dict | None = None) -> LastingSupport:
+    def periodic(self, gait, request: LastingRequest, start: dict | None = None,
+                 limit: LastingSupport | None = None) -> LastingSupport:
         """The periodic cycle of ``gait``'s single support (from the lift-off posture the phase
-        ends in) and a double support of ``request.duration`` s; ``start`` a nearby solution."""
+        ends in) and a double support of ``request.duration`` s; ``start`` a nearby solution, else
+        started from the impulsive limit (``limit``, solved here if not given)."""
         if request.duration == 0.0:
-            return self.limit(gait, request.effort)
+            return limit or self.limit(gait, request.effort)
         program = self.program("periodic", request.effort)
         boundary = self.boundary(gait)
         if start is None:
-            limit = self.program("limit", request.effort).solve(boundary, 0.0)
+            limit = limit or self.limit(gait, request.effort)
             seed = self.program("limit", request.effort).values(limit.solution)
             return program.solve(boundary, request.duration, None, seed)
         return program.solve(boundary, request.duration, start)
