@@ -450,7 +450,7 @@ def test_a_lasting_double_support_is_planned_off_the_spinning_thread(ros, action
     assert not pending.done(), "the lasting solve ended before the node was seen serving during it"
     assert refused.result().status == GoalStatus.STATUS_ABORTED and not refused.result().result.success
     assert "instantaneous double support only" in refused.result().result.message
-    ros.wait(pending.done, 300.0)  # 8 to 55 s of CPU, the programs built first (docs/ros.md)
+    ros.wait(pending.done, 300.0)  # seconds to minutes, the programs built first (docs/ros.md)
     response = pending.result()
     print(f"\nplan_gait with double_support 0.1 s answered in {time.monotonic() - started:.1f} s: {response.message}")
     assert response.success, response.message

@@ -1,8 +1,8 @@
 """The gait-planner node (entry point ``biped-gait-planner``).
 
 - service ``~/plan_gait`` (biped_gait_interfaces/srv/PlanGait): plan one gait; with
-  ``double_support`` > 0, its periodic cycle with a double support that lasts (IPOPT, 8 to 55 s
-  of CPU, on a thread of its own: the node serves the rest meanwhile);
+  ``double_support`` > 0, its periodic cycle with a double support that lasts (an IPOPT solve of
+  seconds to minutes, on a thread of its own: the node serves the rest meanwhile);
 - action ``~/optimize_arm_swing`` (biped_gait_interfaces/action/OptimizeArmSwing): the arm
   amplitude of least effort, with feedback per amplitude evaluated; cancelable;
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
@@ -34,7 +34,8 @@ import copy
 import math
 import threading
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 
@@ -76,7 +77,7 @@ from .recorded import RecordedPublisher, finish_recording
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
 GOAL_NAMES = ("step_length", "period", "alpha_min", "alpha_max", "alpha_step")  # a goal's fields beyond the options
-CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms; a lasting one is left)
+CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms; a lasting one is not waited for)
 GROUPS = ("service", "action")  # who owns a planner: the service's callbacks, the action's
 PARAMETERS = (
     Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
@@ -134,6 +135,16 @@ class InFlight:
         with self._idle:
             self._count -= 1
             self._idle.notify_all()
+
+    @contextmanager
+    def aside(self) -> Iterator[None]:
+        """Not counted inside: a callback awaiting another thread's work uses no handle, and
+        closing need not wait for that work (a lasting solve: seconds)."""
+        self.__exit__()
+        try:
+            yield
+        finally:
+            self.__enter__()
 
     def wait_idle(self, timeout: float) -> bool:
         """Wait up to ``timeout`` s for no callback to run; False if one still does."""
@@ -373,7 +384,8 @@ class GaitPlannerNode(Node):
                 executor.wake()  # resume the awaiting callback now, not at the next spin's timeout
 
         threading.Thread(target=run, name="lasting_double_support", daemon=True).start()
-        return await done
+        with self._in_flight.aside():
+            return await done
 
     def _cached(self, cache: OrderedDict, key: tuple):
         """The answer ``cache`` keeps for ``key`` (made its most recent), or None."""
@@ -532,11 +544,11 @@ def check_goal(step_length: float, period: float, alpha_min: float, alpha_max: f
 def check_instantaneous(double_support: float) -> None:
     """``ValueError`` (one line) for a goal whose double support is not the paper's instantaneous
     one: the search plans 30 and more gaits, and the cycle of each with a double support that lasts
-    is an IPOPT solve of 8 to 55 s (docs/ros.md)."""
+    is an IPOPT solve of seconds to minutes (docs/ros.md)."""
     if double_support != 0.0:
         raise ValueError(f"double_support {double_support:g} s: the arm swing is optimized with the paper's "
                          "instantaneous double support only (0): with one that lasts, each of the 30 and more "
-                         "gaits searched is a solve of 8 to 55 s (plan_gait plans one)")
+                         "gaits searched is a solve of seconds to minutes (plan_gait plans one)")
 
 
 def main(args: list[str] | None = None) -> int:
