@@ -364,7 +364,7 @@ class GaitPlannerNode(Node):
         response.plan = answer.compact if request.omit_trajectory else plan
         response.next_steps = list(answer.next_compact if request.omit_trajectory else answer.next_steps)
         self._keep(self._cache, key, answer)
-        if gait.admissible:
+        if response.success:
             self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
 
     async def _lasting(self, solve: Callable[[], tuple]) -> tuple:
