@@ -51,7 +51,7 @@ import numpy as np
 
 from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.flow import BallisticFlow
-from ..dynamics.impulses import CONE_SIDES
+from ..dynamics.impulses import pyramid
 from ..dynamics.symbolic import SymbolicModel
 from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
 from .flow_function import CoupledConstraints, FlowFunction
@@ -77,17 +77,25 @@ WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipop
 
 @dataclass(frozen=True)
 class LastingRequest:
-    """What the double support is asked: its duration (s) and the effort to minimize (``l1`` or
-    ``l2``)."""
+    """What the double support is asked: its duration (s), the effort to minimize (``l1`` or
+    ``l2``), and the margins a walk tracking it needs (none by default): the least normal force
+    each foot keeps over the phase (``least_normal_force``, N) and how far within the floor's
+    friction coefficient its reactions and impulses stay (``friction_margin``)."""
 
     duration: float
     effort: str = "l1"
+    least_normal_force: float = 0.0
+    friction_margin: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.duration) and self.duration >= 0.0):
             raise ValueError(f"double_support must be a duration >= 0 s, got {self.duration!r}")
         if self.effort not in ("l1", "l2"):
             raise ValueError(f"effort must be l1 or l2, got {self.effort!r}")
+        if not (math.isfinite(self.least_normal_force) and self.least_normal_force >= 0.0):
+            raise ValueError(f"the least normal force must be >= 0 N, got {self.least_normal_force!r}")
+        if not (math.isfinite(self.friction_margin) and self.friction_margin >= 0.0):
+            raise ValueError(f"the friction margin must be >= 0, got {self.friction_margin!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -240,29 +248,34 @@ class LastingProgram:
         self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs),
                                                ca.jacobian(self.sym.frame_position(xs, STANCE_TIP), xs)])
         self.f_rnea = ca.Function("rnea", [xs, vs, a_s], [self.sym.rnea(xs, vs, a_s)])
+        # The new tip's acceleration J a + (d(J v)/dX) v: held at every collocation point.
+        self.f_tip_acceleration = ca.Function("tip_acceleration", [xs, vs, a_s], [
+            ca.jtimes(tip, xs, a_s) + ca.jtimes(ca.jtimes(tip, xs, vs), xs, vs)])
         self.f_mass = ca.Function("mass", [xs], [ca.jacobian(self.sym.rnea(xs, ca.SX.zeros(nx), a_s), a_s)])
 
         # Parameters: the gait's touchdown q_T, Xd^b and Xd^a there, the posture at rest, d.
         p_q, p_rest = ca.SX.sym("q_t", nq), ca.SX.sym("q_rest", nq)
         p_xb, p_xa = ca.SX.sym("xd_b", nx), ca.SX.sym("xd_a", nx)
         p_d = ca.SX.sym("d")
+        # The margins: the least normal force at each tip over the phase (N), the friction
+        # coefficient the reactions and impulses keep within.
+        p_least, p_mu = ca.SX.sym("least_normal_force"), ca.SX.sym("friction")
         tip_t, j2_t, j1_t = self.f_tip(self._embed(p_q))
         d_t = self.f_mass(self._embed(p_q))
         b = np.zeros((nx, na))
         b[np.asarray(at)[self.actuated], np.arange(na)] = 1.0
         b = ca.DM(b)
         nlp = _Program()
-        mu = self.friction
-        angles = np.arange(CONE_SIDES) * 2 * np.pi / CONE_SIDES  # the impulses' inscribed pyramid (section 4.4)
-        pyramid = None
-        if math.isfinite(mu):
-            pyramid = ca.DM(np.column_stack([np.cos(angles), np.sin(angles),
-                                             np.full(CONE_SIDES, -mu * np.cos(np.pi / CONE_SIDES))]))
+        # The impulses' inscribed pyramid (section 4.4), its coefficient the parameter's.
+        sides = None
+        if math.isfinite(self.friction):
+            unit = pyramid(1.0)
+            sides = ca.horzcat(ca.DM(unit[:, :2]), p_mu * ca.DM(unit[:, 2]))
 
-        def press(force, what):  # a reaction that presses, within the floor's pyramid
-            nlp.le(-force[2], f"{what} presses")
-            if pyramid is not None:
-                nlp.le(ca.mtimes(pyramid, force[:3]), f"{what} within the friction pyramid")
+        def press(force, what, least=0.0):  # a reaction that presses (by ``least``), within the floor's pyramid
+            nlp.le(least - force[2], f"{what} presses")
+            if sides is not None:
+                nlp.le(ca.mtimes(sides, force[:3]), f"{what} within the friction pyramid")
 
         def cost(values, weight, scale):
             if self.effort == "l1":
@@ -307,10 +320,11 @@ class LastingProgram:
             effort_limit = self.effort_limits
             self._held(nlp, p_q, xh[at], nlp.var("a", nq, scale=ACCELERATION),
                        nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight),
-                       b, press)
+                       b, press, p_least)
         if n_int > 0:
             points = self._phase(nlp, p_d, p_q if arrives else p_rest, xh[at] if arrives else None,
-                                 None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost)
+                                 None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost,
+                                 p_least)
             outputs.update({key: ca.horzcat(*[pt[i] for pt in points]).T
                             for i, key in enumerate(("q", "v", "a", "tau", "f_old", "f_new"))})
             x_end = self._embed(points[-1][1])
@@ -334,7 +348,7 @@ class LastingProgram:
         self.lbg, self.ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
         self.row_names = nlp.rows
         self.scale = np.concatenate(nlp.scales)
-        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d)
+        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d, p_least, p_mu)
         w = ca.vertcat(*nlp.w)
         problem = {"x": w, "f": sum(nlp.cost), "g": ca.vertcat(*nlp.g), "p": params}
         self.where = nlp.where
@@ -373,10 +387,12 @@ class LastingProgram:
         cost = ca.Function("cost", [problem["x"], problem["p"]], [problem["f"]])
         return {"x": w, "f": cost(w, p), "g": self.constraints(w, p), "p": p}
 
-    def _phase(self, nlp: "_Program", p_d, q_first, v_first, q_last, rest_last: bool, tip_t, b, press, cost) -> list:
+    def _phase(self, nlp: "_Program", p_d, q_first, v_first, q_last, rest_last: bool, tip_t, b, press, cost,
+               least) -> list:
         """The collocation points (q, qd, qdd, Gamma, old and new tip's reactions) over [0, d], nodes
         and midpoints in time order; the first node at ``q_first`` with velocity ``v_first`` (None: at
-        rest), the last at ``q_last`` (at rest when ``rest_last``)."""
+        rest), the last at ``q_last`` (at rest when ``rest_last``); every reaction pressing by
+        ``least`` (N)."""
         nq, na, n_int, rows = self.nq, self.na, self.intervals, self.rows
         effort_limit = self.effort_limits
         lower_q, upper_q = self._ranges()
@@ -392,9 +408,6 @@ class LastingProgram:
                 if v_first is None:
                     nlp.eq(a, "at rest")
             else:
-                tip_k, j2_k, _ = self.f_tip(self._embed(q))
-                nlp.eq(tip_k[rows] - tip_t[rows], "the new tip held")
-                nlp.eq(ca.mtimes(j2_k[rows, :], self._embed(v)), "the new tip at rest")
                 q0, v0, a0 = previous
                 a_m = nlp.var("a_mid", nq, scale=ACCELERATION)
                 v_m = (v0 + v) / 2 + h / 8 * (a0 - a)
@@ -411,23 +424,30 @@ class LastingProgram:
             nlp.eq(previous[1], "at rest")
             nlp.eq(previous[2], "at rest")
         out = []
-        for q, v, a, tau, f2, weight in points:
-            out.append((q, v, a, tau, self._held(nlp, q, v, a, tau, f2, b, press), f2))
+        resting = {0} if v_first is None else set()  # where the acceleration is set to zero (at rest)
+        if rest_last:
+            resting.add(len(points) - 1)
+        for k, (q, v, a, tau, f2, weight) in enumerate(points):
+            out.append((q, v, a, tau, self._held(nlp, q, v, a, tau, f2, b, press, least, k not in resting), f2))
             cost(tau, h / 6 * weight, TORQUE)
         return out
 
-    def _held(self, nlp: "_Program", q, v, a, tau, f2, b, press):
-        """The closed chain's equations of motion at one instant, both reactions pressing within the
-        floor's pyramid; the old tip's reaction (the root rows less the new tip's share)."""
+    def _held(self, nlp: "_Program", q, v, a, tau, f2, b, press, least=0.0, accelerating: bool = True):
+        """The closed chain's equations of motion at one instant, the new tip's acceleration held
+        (unless ``accelerating`` is False: the acceleration is set to zero there), both reactions
+        pressing (by ``least``, N) within the floor's pyramid; the old tip's reaction (the root rows
+        less the new tip's share)."""
         at, roots, rows = self.at.tolist(), self.roots.tolist(), self.rows
         x = self._embed(q)
         _, j2_k, _ = self.f_tip(x)
         generalized = self.f_rnea(x, self._embed(v), self._embed(a))
         nlp.eq(generalized[at] - ca.mtimes(j2_k[rows, at].T, f2[rows]) - ca.mtimes(b[at, :], tau),
                "the closed chain's equations of motion")
+        if accelerating:
+            nlp.eq(self.f_tip_acceleration(x, self._embed(v), self._embed(a))[rows], "the new tip held (its acceleration)")
         f1 = generalized[roots] - f2
-        press(f1, "the old tip's reaction")
-        press(f2, "the new tip's reaction")
+        press(f1, "the old tip's reaction", least)
+        press(f2, "the new tip's reaction", least)
         return f1
 
     @cached_property
@@ -497,14 +517,17 @@ class LastingProgram:
             offset += size
         return w0 / self.scale
 
-    def solve(self, boundary: Boundary, duration: float, start: dict | None = None,
+    def solve(self, boundary: Boundary, request: LastingRequest, start: dict | None = None,
               impulsive: dict[str, np.ndarray] | None = None) -> LastingSupport:
-        """The double support of ``duration`` s between the gait's ends; ``start`` a nearby
-        solution's unknowns and multipliers (``LastingSupport.solution``), else ``initial_guess``
-        (with ``impulsive``)."""
+        """The double support ``request`` asks (its duration and margins; the program's effort)
+        between the gait's ends; ``start`` a nearby solution's unknowns and multipliers
+        (``LastingSupport.solution``), else ``initial_guess`` (with ``impulsive``)."""
         if self.kind == "periodic":
             self.flow_function.evaluation.period = boundary.period
-        params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a, [duration]])
+        duration = request.duration
+        friction = max(self.friction - request.friction_margin, 0.0) if math.isfinite(self.friction) else 0.0
+        params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a,
+                                 [duration, request.least_normal_force, friction]])
         args = dict(p=params, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg, ubg=self.ubg)
         solver = self.solver
         if start is None:
@@ -585,7 +608,7 @@ class LastingPlanner:
 
     def limit(self, gait, effort: str = "l1") -> LastingSupport:
         """The limit d -> 0+: I^-, the held impact pressing, I^+ (its effort is E(0+))."""
-        return self.program("limit", effort).solve(self.boundary(gait), 0.0)
+        return self.program("limit", effort).solve(self.boundary(gait), LastingRequest(0.0, effort))
 
     def periodic(self, gait, request: LastingRequest, start: dict | None = None,
                  limit: LastingSupport | None = None) -> LastingSupport:
@@ -599,16 +622,16 @@ class LastingPlanner:
         if start is None:
             limit = limit or self.limit(gait, request.effort)
             seed = self.program("limit", request.effort).values(limit.solution)
-            return program.solve(boundary, request.duration, None, seed)
-        return program.solve(boundary, request.duration, start)
+            return program.solve(boundary, request, None, seed)
+        return program.solve(boundary, request, start)
 
     def stop(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
         """From ``gait``'s touchdown to rest in the standing posture ``rest`` (rad, on the same two
         feet: ``core/walking/balance.standing_pose`` at the gait's step length and width): I^-, the
         held impact, a double support of ``request.duration`` s ending at rest (docs/model.md 14)."""
-        return self.program("stop", request.effort).solve(self.boundary(gait, rest), request.duration)
+        return self.program("stop", request.effort).solve(self.boundary(gait, rest), request)
 
     def start(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
         """From rest in the standing posture ``rest`` onto ``gait``: a double support of
         ``request.duration`` s from rest to the gait's touchdown posture, then I^+ onto its next step."""
-        return self.program("start", request.effort).solve(self.boundary(gait, rest), request.duration)
+        return self.program("start", request.effort).solve(self.boundary(gait, rest), request)
