@@ -26,8 +26,11 @@ rest there onto the gait (a double support, then I^+).
 
 The phase is transcribed by Hermite-Simpson collocation (compressed form) in inverse-dynamics
 form: q, qd, qdd, Gamma and the new tip's reaction at every node and midpoint, the equations of
-motion as equality constraints at each, the new tip's held position and velocity at the nodes;
-the old tip's reaction is the double-support model's root rows. The impulses' equations are linear
+motion and the new tip's held acceleration as equality constraints at each (so that the forces are
+those of the closed chain under the torques, which a walk tracking the plan feeds forward); where
+the phase ends at a given posture (the stop, the start) also the tip's position and velocity at the
+nodes, the defects corrected along the held rows (Posa, Kuindersma and Tedrake 2016); the old
+tip's reaction is the double-support model's root rows. The impulses' equations are linear
 at q_T (I^+'s, at the lift-off posture, are not). The whole is one nonlinear program solved by
 IPOPT (CasADi's, with MUMPS) with exact first derivatives from ``core/dynamics/symbolic.py`` and
 the flow's sensitivities. The effort minimized is
@@ -67,6 +70,7 @@ TORQUE = 100.0  # N m
 JOINT_IMPULSE = 10.0  # N m s
 ACCELERATION = 10.0  # rad/s^2
 IMPULSE_TIME = 0.1  # s: a reaction impulse's scale is the weight over this long
+CORRECTION = 1e-6  # m, m/s: the collocation defects' corrections along the held rows (the rule's error)
 NEGLIGIBLE = 1e-7  # of a reaction's scale: below it a reaction is the solver's tolerance, not a force
 KINDS = ("periodic", "stop", "start", "limit")
 # IPOPT started at a nearby solution with its multipliers: the barrier parameter from near its end,
@@ -196,9 +200,13 @@ class _Program:
 
     def le(self, expr, what: str, upper: float = 0.0) -> None:
         """expr <= upper."""
+        self.within(expr, what, upper, -np.inf)
+
+    def within(self, expr, what: str, upper: float, lower: float | None = None) -> None:
+        """lower <= expr <= upper (lower None: -upper)."""
         self.rows += [what] * expr.shape[0]
         self.g.append(expr)
-        self.lbg.append(np.full(expr.shape[0], -np.inf))
+        self.lbg.append(np.full(expr.shape[0], -upper if lower is None else lower))
         self.ubg.append(np.full(expr.shape[0], upper))
 
 
@@ -393,7 +401,7 @@ class LastingProgram:
         and midpoints in time order; the first node at ``q_first`` with velocity ``v_first`` (None: at
         rest), the last at ``q_last`` (at rest when ``rest_last``); every reaction pressing by
         ``least`` (N)."""
-        nq, na, n_int, rows = self.nq, self.na, self.intervals, self.rows
+        nq, na, n_int, rows, at = self.nq, self.na, self.intervals, self.rows, self.at.tolist()
         effort_limit = self.effort_limits
         lower_q, upper_q = self._ranges()
         h = p_d / n_int
@@ -411,8 +419,20 @@ class LastingProgram:
                 q0, v0, a0 = previous
                 a_m = nlp.var("a_mid", nq, scale=ACCELERATION)
                 v_m = (v0 + v) / 2 + h / 8 * (a0 - a)
-                nlp.eq(q - q0 - h / 6 * (v0 + 4 * v_m + v), "collocation")
-                nlp.eq(v - v0 - h / 6 * (a0 + 4 * a_m + a), "collocation")
+                q_defect = q - q0 - h / 6 * (v0 + 4 * v_m + v)
+                v_defect = v - v0 - h / 6 * (a0 + 4 * a_m + a)
+                if q_last is not None:
+                    # A phase that ends at a given posture: the tip also held at the nodes in
+                    # position and velocity, the defects corrected along the held rows (Posa,
+                    # Kuindersma and Tedrake 2016) by what the rule's error alone makes non-zero.
+                    tip_k, j2_k, _ = self.f_tip(self._embed(q))
+                    nlp.eq(tip_k[rows] - tip_t[rows], "the new tip held")
+                    nlp.eq(ca.mtimes(j2_k[rows, :], self._embed(v)), "the new tip at rest")
+                    held_rows = j2_k[rows, at].T
+                    q_defect -= ca.mtimes(held_rows, nlp.var("gamma_q", len(rows), scale=CORRECTION))
+                    v_defect -= ca.mtimes(held_rows, nlp.var("gamma_v", len(rows), scale=CORRECTION))
+                nlp.eq(q_defect, "collocation")
+                nlp.eq(v_defect, "collocation")
                 tau_m = nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE)
                 points.append([(q0 + q) / 2 + h / 8 * (v0 - v), v_m, a_m, tau_m,
                                nlp.var("f_new_mid", 3, scale=self.weight), 4.0])

@@ -6,9 +6,11 @@ as the impulsive double support chooses its impulses, towards the next step re-a
 actual state (``reaim``), and the leg exchange.
 
 **I^- at the touchdown.** The plan's landing is soft: its held impact's impulses are zero. Off the
-plan by the walk's errors, the planned I^- could leave one of them pulling. The walk takes the I^-
-nearest the plan's (least sum |I^- - I^-*|, a linear program by HiGHS) whose held impact presses
-both feet within their friction pyramids; none is a fall, with the reason.
+plan by the walk's errors (the re-aimed single support reaches q_T, not the plan's velocity), the
+planned I^- could leave one of them pulling, and the phase would start off its plan. The walk
+takes the I^- whose held impact presses both feet within their friction pyramids and starts the
+phase nearest the plan's velocity (a linear program by HiGHS): the seven joint impulses set all
+of it but the roll about the feet line, which no impulse changes. None is a fall, with the reason.
 
 A gait's orbit carries its double support to track (``orbit.PlannedOrbit.double_support``): the
 single support's reset goes to ``HeldTouchdown`` when the step's aim has one, else to its own next
@@ -34,6 +36,7 @@ from .reaim import impulsive_double_support
 
 STEP = 1e-3  # s: the closed chain's integration step (RK4), as standing's
 PRESS_TOLERANCE = 1e-9  # N s: a held impulse this close to the pyramid's faces is on them (HiGHS's feasibility)
+IMPULSE_WEIGHT = 1e-2  # rad/s per N m s: I^-'s distance from the plan's, against the landing's velocity's
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,28 +56,34 @@ class LastingTouchdown:
 
 
 def held_landing(plan: HeldSupport, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, HeldImpact]:
-    """The I^- (N m s) nearest the plan's whose held impact at the touchdown (``q``, ``qd``: the
-    single support's pre-impact state) presses both feet within the parameter set's friction
-    pyramid, and that impact (module docstring); ``Fall`` if there is none."""
+    """The I^- (N m s) whose held impact at the touchdown (``q``, ``qd``: the single support's
+    pre-impact state) starts the double support nearest the plan's start (least sum |qd+ - qd*(0)|,
+    rad/s, then least sum |I^- - I^-*| by a hundredth as much), pressing both feet within the
+    parameter set's friction pyramid; and that impact (module docstring). ``Fall`` if none presses."""
     chain = plan.chain
     m = chain.mass_matrix(q)[np.ix_(chain.at, chain.at)]
     jump = np.linalg.solve(m, chain.selection)  # d qd / d I^-, the old tip held
 
-    def impulses(i_minus: np.ndarray) -> np.ndarray:
+    def landing(i_minus: np.ndarray) -> np.ndarray:
         held = chain.impact(q, qd + jump @ i_minus)
-        return np.concatenate([held.old[:3], held.new[:3]])
+        return np.concatenate([held.old[:3], held.new[:3], held.qd])
 
-    na = len(plan.i_minus)
-    base = impulses(np.zeros(na))
-    linear = np.column_stack([impulses(e) - base for e in np.eye(na)])  # the impact is linear in the velocity
+    na, n = len(plan.i_minus), len(qd)
+    base = landing(np.zeros(na))
+    linear = np.column_stack([landing(e) - base for e in np.eye(na)])  # the impact is linear in the velocity
     rows = np.vstack([[0.0, 0.0, -1.0], pyramid(chain.bm.params.friction)])
     faces = np.kron(np.eye(2), rows)  # both tips: pressing, within the pyramid
-    # Unknowns [I^-, s]: least sum s with s >= |I^- - I^-*|.
-    eye = np.eye(na)
-    a_ub = np.block([[faces @ linear, np.zeros((len(faces), na))], [eye, -eye], [-eye, -eye]])
-    b_ub = np.concatenate([-faces @ base + PRESS_TOLERANCE, plan.i_minus, -plan.i_minus])
-    cost = np.concatenate([np.zeros(na), np.ones(na)])
-    result = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * (2 * na), method="highs")
+    impulses, velocity = linear[:6], linear[6:]
+    # Unknowns [I^-, s (na), r (n)]: least sum r + sum s / 100 with r >= |qd+ - qd*|, s >= |I^- - I^-*|.
+    eye_a, eye_n = np.eye(na), np.eye(n)
+    zero_an, zero_na = np.zeros((na, n)), np.zeros((n, na))
+    a_ub = np.block([[faces @ impulses, np.zeros((len(faces), na + n))],
+                     [eye_a, -eye_a, zero_an], [-eye_a, -eye_a, zero_an],
+                     [velocity, zero_na, -eye_n], [-velocity, zero_na, -eye_n]])
+    gap = plan.qd[0] - base[6:]
+    b_ub = np.concatenate([-faces @ base[:6] + PRESS_TOLERANCE, plan.i_minus, -plan.i_minus, gap, -gap])
+    cost = np.concatenate([np.zeros(na), np.full(na, IMPULSE_WEIGHT), np.ones(n)])
+    result = linprog(cost, A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * (2 * na + n), method="highs")
     if result.status != 0:
         planned = chain.impact(q, qd + jump @ plan.i_minus)
         raise Fall(f"no I^- lands both feet pressing within the friction cone: with the plan's the held impact's "
