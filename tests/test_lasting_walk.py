@@ -1,5 +1,5 @@
 """The double support that lasts, walked (core/walking/phases/lasting.py, docs/model.md section
-14.6): the hybrid engine from the plan's lift-off, I^- nearest the plan's, the held touchdown, the
+14.1): the hybrid engine from the plan's lift-off, I^- that lands the phase nearest the plan's start, the held touchdown, the
 tracked phase with both feet down, the re-aimed lift-off."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from biped_gait.core.walking.runner import Walker
 
 DURATION = 0.1  # s
 RATE = 100.0  # samples per second
-STEPS = 3  # walked before the re-aim loses it (docs/model.md 14.6: the fourth lift-off's LP fails)
+STEPS = 3  # walked before the re-aim loses it (docs/model.md 14.1: the fourth lift-off's LP fails)
 
 
 @pytest.fixture(scope="module")

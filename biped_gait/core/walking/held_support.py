@@ -1,4 +1,4 @@
-"""What a walk needs of a double support that lasts (docs/model.md section 14.6): the planned
+"""What a walk needs of a double support that lasts (docs/model.md section 14.1): the planned
 phase (``core/gait/lasting.py``'s ``LastingSupport``) as a reference to track, and the feedback
 that tracks it.
 

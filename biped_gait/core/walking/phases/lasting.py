@@ -1,4 +1,4 @@
-"""The double support that lasts, walked (docs/model.md section 14.6): at the swing foot's
+"""The double support that lasts, walked (docs/model.md section 14.1): at the swing foot's
 touchdown, I^- and the passive impact with both feet held (``HeldTouchdown``, instantaneous); then
 d seconds with both feet on the ground, the closed chain driven by the planned torques and the
 feedback that tracks the plan (``LastingDoubleSupport``, ``held_support``); at lift-off I^+, chosen
