@@ -83,13 +83,16 @@ WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipop
 class LastingRequest:
     """What the double support is asked: its duration (s), the effort to minimize (``l1`` or
     ``l2``), and the margins a walk tracking it needs (none by default): the least normal force
-    each foot keeps over the phase (``least_normal_force``, N) and how far within the floor's
-    friction coefficient its reactions and impulses stay (``friction_margin``)."""
+    each foot keeps over the phase (``least_normal_force``, N), how far within the floor's
+    friction coefficient its reactions and impulses stay (``friction_margin``), and the least
+    vertical impulse with which the old foot pushes off at I^+ (``push_off``, N s; 0: none, it
+    leaves passively as the paper's; the periodic cycle only)."""
 
     duration: float
     effort: str = "l1"
     least_normal_force: float = 0.0
     friction_margin: float = 0.0
+    push_off: float = 0.0
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.duration) and self.duration >= 0.0):
@@ -100,6 +103,8 @@ class LastingRequest:
             raise ValueError(f"the least normal force must be >= 0 N, got {self.least_normal_force!r}")
         if not (math.isfinite(self.friction_margin) and self.friction_margin >= 0.0):
             raise ValueError(f"the friction margin must be >= 0, got {self.friction_margin!r}")
+        if not (math.isfinite(self.push_off) and self.push_off >= 0.0):
+            raise ValueError(f"the push-off must be >= 0 N s, got {self.push_off!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,6 +149,7 @@ class LastingSupport:
     iterations: int
     solve_time_s: float
     next_start_velocity: np.ndarray | None = None  # periodic: the next step's qd(0) (its own coordinates, rad/s)
+    push_off: np.ndarray | None = None  # periodic: the old tip's reaction impulse at I^+ (N s, world axes of the step's model)
     solution: dict | None = None  # the program's unknowns and multipliers, to warm-start a nearby solve
 
     @property
@@ -340,14 +346,20 @@ class LastingProgram:
             # I^+: the new tip held, onto Xd^a (eq. 10), at the lift-off posture.
             ip, r2p = nlp.var("i_plus", na, scale=JOINT_IMPULSE), nlp.var("r2_plus", 3, scale=self.impulse_scale)
             d_l, j2_l, xd_a = d_t, j2_t, p_xa
+            push = ca.DM.zeros(nx)
             if periodic:
                 q_l = points[-1][0]
-                _, j2_l, _ = self.f_tip(self._embed(q_l))
+                _, j2_l, j1_l = self.f_tip(self._embed(q_l))
                 d_l = self.f_mass(self._embed(q_l))
                 qd = ca.mtimes(ca.DM(self.exchange.inverse), qd_next)
                 xd_a = ca.vertcat(-ca.mtimes(j2_l[:, 3:], qd), qd)  # LinearExchange.next_velocity
                 nlp.le(-xd_a[2], "the old tip leaves the ground")
-            nlp.eq(ca.mtimes(d_l, xd_a - x_end) - ca.mtimes(b, ip) - ca.mtimes(j2_l.T, r2p), "I^+ (eq. 10)")
+                # The old tip's push-off, if the request asks for one (its bounds, ``solve``).
+                r1p = nlp.var("r1_plus", 3, scale=self.impulse_scale)
+                press(r1p, "the old tip's push-off")
+                push = ca.mtimes(j1_l.T, r1p)
+                outputs["push_off"] = r1p
+            nlp.eq(ca.mtimes(d_l, xd_a - x_end) - ca.mtimes(b, ip) - ca.mtimes(j2_l.T, r2p) - push, "I^+ (eq. 10)")
             press(r2p, "the new tip's reaction to I^+")
             cost(ip, 1.0, JOINT_IMPULSE)
             outputs["i_plus"] = ip
@@ -549,6 +561,14 @@ class LastingProgram:
         params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a,
                                  [duration, request.least_normal_force, friction]])
         args = dict(p=params, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg, ubg=self.ubg)
+        if "r1_plus" in self.where:  # the push-off: none (zero), or at least the request's upwards
+            at = self.where["r1_plus"]
+            lower, upper = self.lbw.copy(), self.ubw.copy()
+            lower[at:at + 3], upper[at:at + 3] = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            if request.push_off > 0.0:
+                lower[at:at + 3] = (-np.inf, -np.inf, request.push_off / self.scale[at + 2])
+                upper[at:at + 3] = np.inf
+            args.update(lbx=lower, ubx=upper)
         solver = self.solver
         if start is None:
             args["x0"] = self.initial_guess(boundary, impulsive)
@@ -587,8 +607,9 @@ class LastingProgram:
         message = "solved" if success else (f"no {self.kind} double support of {duration:g} s: IPOPT "
                                             f"{stats['return_status']}; {self._worst(solution)}")
         next_start = out["qd_next"].ravel() if "qd_next" in out else None
+        push_off = out["push_off"].ravel() if "push_off" in out else None
         return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held, l1, l2,
-                              total, int(stats["iter_count"]), elapsed, next_start, solution)
+                              total, int(stats["iter_count"]), elapsed, next_start, push_off, solution)
 
     def _worst(self, solution: dict) -> str:
         """What the last iterate violates most, in the constraints' words and units."""

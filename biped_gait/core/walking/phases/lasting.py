@@ -36,6 +36,10 @@ from .reaim import impulsive_double_support
 
 STEP = 1e-3  # s: the closed chain's integration step (RK4), as standing's
 PRESS_TOLERANCE = 1e-9  # N s: a held impulse this close to the pyramid's faces is on them (HiGHS's feasibility)
+# The lift-off's re-aim starts from the tracked phase's error (a few tenths of a mrad), which the
+# ballistic step amplifies about 150-fold; its chord steps converge linearly (a factor of 5 to 50
+# each), so from there they need up to about 15 where the impulsive walk's touchdowns need 7.
+LIFT_OFF_REAIM_STEPS = 20
 IMPULSE_WEIGHT = 1e-2  # rad/s per N m s: I^-'s distance from the plan's, against the landing's velocity's
 
 
@@ -141,7 +145,8 @@ class LastingDoubleSupport(BothFeet):
         touchdown's I^-; the step's effort their sum |I| (the torques' integral is in the samples).
         With legs of pitch joints only the new tip's sideways drift (``ClosedChain.lateral_drift``)
         is handed to the old one, which leaves: the new foot is at rest, as its impulses need."""
-        following, lift_off = impulsive_double_support(ctx, state, end.q, end.qd, end.t, self.chain.lateral_drift(end.q, end.qd))
+        following, lift_off = impulsive_double_support(ctx, state, end.q, end.qd, end.t,
+                                                       self.chain.lateral_drift(end.q, end.qd), LIFT_OFF_REAIM_STEPS)
         report = self.report
         i_plus = lift_off.i_minus + lift_off.i_plus
         touchdown = replace(lift_off, i_minus=report.i_minus, i_plus=i_plus,

@@ -23,12 +23,14 @@ CLOSURE_ROUNDS = 10  # re-aims per double support at most, with legs leaning (th
 
 
 def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarray, qd_td: np.ndarray,
-                             t_step: float, slip: np.ndarray | None = None) -> tuple[WalkState, Touchdown]:
+                             t_step: float, slip: np.ndarray | None = None,
+                             reaim_steps: int | None = None) -> tuple[WalkState, Touchdown]:
     """The double support at the touchdown (``q_td``, ``qd_td``) ``t_step`` s into ``state``'s step
     (docs/model.md section 8.4): the aim moved on to the next step, the next step re-aimed (or the
     plan's velocity made reachable, without re-aiming), the impulses from the actual pre-impact
     state by the effort LP, then the leg exchange. ``slip``: the old stance tip's velocity before
-    it (m/s, the step's model axes; None: at rest). The next step's start and the touchdown report;
+    it (m/s, the step's model axes; None: at rest); ``reaim_steps``: the re-aim's chord steps (None:
+    the walk's settings'). The next step's start and the touchdown report;
     ``Fall`` if no re-aim or no impulses reach it."""
     hybrid, feedback, bm, s = ctx.hybrid, ctx.feedback, ctx.hybrid.bm, state
     q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
@@ -36,14 +38,14 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
     side = other_side(s.stance_side)
     try:
         aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step, feedback.advanced(s.aim, side), error,
-                                                        slip)
+                                                        slip, reaim_steps)
     except Fall:
         if s.aim.pending is None:
             raise
         # a transition step the re-aim cannot make from this touchdown: put off, the walked gait aimed at again
         aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step,
                                                         feedback.advanced(replace(s.aim, pending=None), side), error,
-                                                        slip)
+                                                        slip, reaim_steps)
     # The new stance foot's world position, then the mirror: the next step in model coordinates.
     new_foot = s.stance_foot + s.axes @ bm.swing_tip(q_td)
     new_foot[2] = 0.0
@@ -61,7 +63,7 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
 
 
 def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.ndarray, t_step: float, aim,
-                    error: float, slip: np.ndarray | None = None):
+                    error: float, slip: np.ndarray | None = None, reaim_steps: int | None = None):
     """The re-aim towards ``aim`` (the next step's) and the impulses from the touchdown (``q_td``,
     ``qd_td``) ``t_step`` s into ``s``'s step, in closure rounds with legs leaning: the aim with the
     re-aim's duration, the post-impact velocity, the impulses, the impact problem planned towards
@@ -78,7 +80,7 @@ def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.
         if feedback.reaim:
             try:
                 qd_next, next_period = feedback.reaim_velocity(aim, hybrid.exchange.configuration(q_td), impact,
-                                                               planned.xd_b, foot_line_moment, again > 0)
+                                                               planned.xd_b, foot_line_moment, again > 0, reaim_steps)
             except Fall as exc:
                 momentum = float(impact.momentum_row @ planned.xd_b)
                 planned_momentum = float(hybrid.impact(q_t).momentum_row @ bm.embed(qd_b))
