@@ -47,7 +47,7 @@ def test_the_first_steps_walk_with_both_feet_down(walked):
     tolerance), the landing soft; twenty steps each last about T + d, their double supports have
     both feet on the ground in every sample, pressing (the runner checks the cone: a sample out of
     it is a fall), their torques within the joints' 200 N m; the walk settles on a nearby cycle
-    (docs/model.md 14.1: its touchdowns 0.16 rad/s from the plan's velocity, their distance
+    (docs/model.md 14.1: its touchdowns 0.15 rad/s from the plan's velocity, their distance
     changing by less than 1 mrad/s a step by the twentieth)."""
     support, orbit, outcomes = walked
     for k, outcome in enumerate(outcomes):

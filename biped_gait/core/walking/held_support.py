@@ -6,9 +6,10 @@ that tracks it.
 intervals) carry q, qd, qdd and the torques Gamma; between them q and qd are the cubic Hermite
 interpolants of (q, qd) and (qd, qdd), Gamma the linear one.
 
-**The feedback** is the standing balance's LQR machinery (``balance``) about the reference: the
-closed chain linearized at the phase's middle point (its state and torques), in the minimal
-coordinates of the held rows there, Bryson's weights; the torques are
+**The feedback** is the standing balance's LQR machinery (``balance``) about the reference: at
+each sample the closed chain linearized there (its state and torques), in the minimal coordinates
+of the held rows there, Bryson's weights; at time t the gain K and basis N of the nearest sample,
+and the torques
 
     Gamma = Gamma*(t) - K [N'(q - q*(t)); N'(qd - qd*(t))],
 
@@ -56,8 +57,8 @@ RATE_SCALE = 1e-1  # rad/s
 class HeldSupport:
     """A planned double support of ``duration`` s to track (module docstring): the closed chain,
     the samples ``t`` (s), ``q``, ``qd``, ``qdd`` (rows, the step's coordinates) and ``torques``
-    (N m, actuated joints), the planned I^- (N m s) that opens it, and the feedback (the minimal
-    coordinates' ``basis``, the ``gain``, the joints' effort ``limits``)."""
+    (N m, actuated joints), the planned I^- (N m s) that opens it, and the feedback (at each
+    sample the minimal coordinates' ``basis`` and the ``gain``; the joints' effort ``limits``)."""
 
     chain: ClosedChain
     duration: float
@@ -83,10 +84,13 @@ class HeldSupport:
         return q, qd, torque
 
     def law(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """The actuated joints' torques (N m) at ``t`` (s in the phase) in (``q``, ``qd``)."""
+        """The actuated joints' torques (N m) at ``t`` (s in the phase) in (``q``, ``qd``): the
+        gain and basis of the sample nearest ``t``."""
         q_ref, qd_ref, torque = self.reference(t)
-        error = np.concatenate([self.basis.T @ (q - q_ref), self.basis.T @ (qd - qd_ref)])
-        return np.clip(torque - self.gain @ error, -self.limits, self.limits)
+        k = int(np.argmin(np.abs(self.t - t)))
+        basis = self.basis[k]
+        error = np.concatenate([basis.T @ (q - q_ref), basis.T @ (qd - qd_ref)])
+        return np.clip(torque - self.gain[k] @ error, -self.limits, self.limits)
 
 
 def walking_request(duration: float, effort: str = "l1"):
@@ -104,13 +108,15 @@ def held_support(chain: ClosedChain, support) -> HeldSupport:
         raise ValueError("a double support to walk needs a solved phase of positive duration")
     at = chain.at
     q, qd, qdd = support.x[:, at], support.xd[:, at], support.xdd[:, at]
-    middle = len(support.t) // 2
-    basis = minimal_basis(chain, q[middle])
-    a, b = linearization(chain, q[middle], qd[middle], support.torques[middle], basis)
     limits = effort_limits(chain)
-    gain = lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE)
-    return HeldSupport(chain, support.duration, support.t, q, qd, qdd, support.torques, support.i_minus, basis,
-                       gain, limits)
+    bases, gains = [], []
+    for k in range(len(support.t)):
+        basis = minimal_basis(chain, q[k])
+        a, b = linearization(chain, q[k], qd[k], support.torques[k], basis)
+        bases.append(basis)
+        gains.append(lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE))
+    return HeldSupport(chain, support.duration, support.t, q, qd, qdd, support.torques, support.i_minus,
+                       np.array(bases), np.array(gains), limits)
 
 
 def lasting_orbit(gait, support, chain: ClosedChain, flow) -> PlannedOrbit:

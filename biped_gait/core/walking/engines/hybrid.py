@@ -18,8 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...dynamics.flow import hermite_samples
-from ...dynamics.hybrid import HybridStep
-from ..finite_support import passive_impact
+from ...dynamics.hybrid import HybridStep, passive_impact
 from .engine import Held, Motion
 
 
