@@ -9,11 +9,12 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.core.dynamics.closed_chain import ClosedChain
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
-from biped_gait.core.walking.events import DOUBLE_SUPPORT
+from biped_gait.core.walking.events import DOUBLE_SUPPORT, CouldNotStart, Finished, Sample
 from biped_gait.core.walking.held_support import LEAST_NORMAL_FORCE, PUSH_OFF, lasting_orbit, walking_request
+from biped_gait.core.walking.orbit import PlannedOrbit
 from biped_gait.core.walking.runner import Walker
+from biped_gait.core.walking.walk import Walk
 
 DURATION = 0.1  # s
 RATE = 100.0  # samples per second
@@ -26,8 +27,7 @@ def walked():
     gait = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5)))
     support = planner.lasting.periodic(gait, walking_request(DURATION))
     assert support.success, support.message
-    chain = ClosedChain(planner.hybrid.bm, planner.hybrid.exchange)
-    orbit = lasting_orbit(gait, support, chain, planner.lasting.flow)
+    orbit = lasting_orbit(PlannedOrbit.of(gait), support, planner.hybrid)
     walker = Walker(planner.hybrid, orbit, RATE)
     return support, orbit, [walker.walk_step() for _ in range(STEPS)]
 
@@ -69,3 +69,17 @@ def test_the_first_steps_walk_with_both_feet_down(walked):
     assert first.state_error < 1e-8
     assert np.abs(first.i_minus - first.i_minus_planned).sum() < 1e-6
     assert np.abs(first.held_old).max() < 1e-6 and np.abs(first.held_new).max() < 1e-6  # the soft landing
+
+
+def test_the_walk_walks_it_and_refuses_what_cannot(walked):
+    """``Walk`` (what the simulator runs) walks the orbit's double support in the hybrid engine, its
+    samples in the double support with both feet; MuJoCo and the momentum steering are refused with
+    their reasons."""
+    _, orbit, _ = walked
+    items = list(Walk(orbit, RATE, steps=2))
+    assert isinstance(items[-1], Finished), items[-1]
+    double = [item for item in items if isinstance(item, Sample) and item.phase == DOUBLE_SUPPORT]
+    assert double and all(len(sample.feet_on_ground) == 2 for sample in double)
+    for kwargs, words in (({"engine": "mujoco"}, "hybrid engine only"), ({"momentum_rate": 0.5}, "duration re-aim")):
+        refused = list(Walk(orbit, RATE, steps=2, **kwargs))
+        assert len(refused) == 1 and isinstance(refused[0], CouldNotStart) and words in refused[0].reason

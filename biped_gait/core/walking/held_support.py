@@ -29,6 +29,8 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline
 
 from ..dynamics.closed_chain import ClosedChain
+from ..dynamics.hybrid import HybridStep
+from ..dynamics.settings import DEFAULTS, Settings
 from .balance import effort_limits, linearization, lqr_gain, minimal_basis
 from .orbit import PlannedOrbit
 
@@ -119,13 +121,14 @@ def held_support(chain: ClosedChain, support) -> HeldSupport:
                        np.array(bases), np.array(gains), limits)
 
 
-def lasting_orbit(gait, support, chain: ClosedChain, flow) -> PlannedOrbit:
-    """The orbit of ``gait`` walked with the planned double support ``support`` (d > 0): its single
-    support from the lift-off posture (the legs exchanged) with the next step's start velocity,
-    flown by ``flow`` (the planner's) for T to the touchdown posture q_T; the double support to
-    track at its end."""
-    orbit = PlannedOrbit.of(gait)
-    q0 = chain.exchange.configuration(support.x[-1, chain.at])
+def lasting_orbit(orbit: PlannedOrbit, support, hybrid: HybridStep, settings: Settings = DEFAULTS) -> PlannedOrbit:
+    """The gait of ``orbit`` (its d = 0 plan) walked with the planned double support ``support``
+    (d > 0; ``lasting.LastingSupport``, or anything with its fields): its single support from the
+    lift-off posture (the legs exchanged) with the next step's start velocity, flown on the walk's
+    grid (``settings.walk_steps``) for T to the touchdown posture q_T; the double support to track
+    at its end."""
+    chain = ClosedChain(hybrid.bm, hybrid.exchange)
+    q0 = hybrid.exchange.configuration(np.asarray(support.x)[-1, chain.at])
     qd_a = np.asarray(support.next_start_velocity)
-    arrival = flow.propagate(q0, qd_a, orbit.period)
+    arrival = hybrid.flow(settings.walk_steps).propagate(q0, qd_a, orbit.period)
     return replace(orbit, q0=q0, qd_a=qd_a, qd_b=arrival.qd, double_support=held_support(chain, support))
