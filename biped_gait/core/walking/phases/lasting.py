@@ -32,7 +32,7 @@ from ..held_support import HeldSupport
 from ..state import WalkState
 from .held import BothFeet
 from .phase import End, Guard, Phase, Transition, WalkContext
-from .reaim import impulsive_double_support
+from .reaim import LiftOff, impulsive_double_support
 
 STEP = 1e-3  # s: the closed chain's integration step (RK4), as standing's
 PRESS_TOLERANCE = 1e-9  # N s: a held impulse this close to the pyramid's faces is on them (HiGHS's feasibility)
@@ -146,7 +146,7 @@ class LastingDoubleSupport(BothFeet):
         With legs of pitch joints only the new tip's sideways drift (``ClosedChain.lateral_drift``)
         is handed to the old one, which leaves: the new foot is at rest, as its impulses need."""
         following, lift_off = impulsive_double_support(ctx, state, end.q, end.qd, end.t,
-                                                       self.chain.lateral_drift(end.q, end.qd), LIFT_OFF_REAIM_STEPS)
+                                                       LiftOff(self.chain.lateral_drift(end.q, end.qd), LIFT_OFF_REAIM_STEPS))
         report = self.report
         i_plus = lift_off.i_minus + lift_off.i_plus
         touchdown = replace(lift_off, i_minus=report.i_minus, i_plus=i_plus,

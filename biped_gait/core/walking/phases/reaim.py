@@ -8,7 +8,7 @@ supports end with. Units SI, rad; times in the step.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,30 +22,38 @@ from .phase import WalkContext
 CLOSURE_ROUNDS = 10  # re-aims per double support at most, with legs leaning (the planner's rounds)
 
 
+@dataclass(frozen=True, eq=False)
+class LiftOff:
+    """What a lift-off from a double support that lasts changes in the re-aimed reset: the old
+    stance tip's velocity before it (``slip``, m/s, the step's model axes; None: at rest) and the
+    re-aim's chord steps (``reaim_steps``)."""
+
+    slip: np.ndarray | None
+    reaim_steps: int
+
+
 def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarray, qd_td: np.ndarray,
-                             t_step: float, slip: np.ndarray | None = None,
-                             reaim_steps: int | None = None) -> tuple[WalkState, Touchdown]:
+                             t_step: float, lift_off: LiftOff | None = None) -> tuple[WalkState, Touchdown]:
     """The double support at the touchdown (``q_td``, ``qd_td``) ``t_step`` s into ``state``'s step
     (docs/model.md section 8.4): the aim moved on to the next step, the next step re-aimed (or the
     plan's velocity made reachable, without re-aiming), the impulses from the actual pre-impact
-    state by the effort LP, then the leg exchange. ``slip``: the old stance tip's velocity before
-    it (m/s, the step's model axes; None: at rest); ``reaim_steps``: the re-aim's chord steps (None:
-    the walk's settings'). The next step's start and the touchdown report;
-    ``Fall`` if no re-aim or no impulses reach it."""
+    state by the effort LP, then the leg exchange; ``lift_off``: from a double support that lasts
+    (None: a touchdown). The next step's start and the touchdown report; ``Fall`` if no re-aim or
+    no impulses reach it."""
     hybrid, feedback, bm, s = ctx.hybrid, ctx.feedback, ctx.hybrid.bm, state
     q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
     error = max(float(np.max(np.abs(q_td - q_t))), float(np.max(np.abs(qd_td - qd_b))))
     side = other_side(s.stance_side)
     try:
         aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step, feedback.advanced(s.aim, side), error,
-                                                        slip, reaim_steps)
+                                                        lift_off)
     except Fall:
         if s.aim.pending is None:
             raise
         # a transition step the re-aim cannot make from this touchdown: put off, the walked gait aimed at again
         aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step,
                                                         feedback.advanced(replace(s.aim, pending=None), side), error,
-                                                        slip, reaim_steps)
+                                                        lift_off)
     # The new stance foot's world position, then the mirror: the next step in model coordinates.
     new_foot = s.stance_foot + s.axes @ bm.swing_tip(q_td)
     new_foot[2] = 0.0
@@ -63,7 +71,7 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
 
 
 def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.ndarray, t_step: float, aim,
-                    error: float, slip: np.ndarray | None = None, reaim_steps: int | None = None):
+                    error: float, lift_off: LiftOff | None):
     """The re-aim towards ``aim`` (the next step's) and the impulses from the touchdown (``q_td``,
     ``qd_td``) ``t_step`` s into ``s``'s step, in closure rounds with legs leaning: the aim with the
     re-aim's duration, the post-impact velocity, the impulses, the impact problem planned towards
@@ -73,8 +81,9 @@ def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.
     foot_line_moment = s.aim.orbit.foot_line_moment  # the plan's, of this double support
     impact = hybrid.impact(q_td)
     planned = impact.problem(qd_td, np.asarray(aim.orbit.qd_a))
-    if slip is not None:  # the whole robot moving with the old tip: X's first three rows, its position
-        planned = replace(planned, xd_b=planned.xd_b + np.concatenate([slip, np.zeros(len(planned.xd_b) - 3)]))
+    if lift_off is not None and lift_off.slip is not None:  # the whole robot moving with the old tip: X's first three rows
+        planned = replace(planned, xd_b=planned.xd_b + np.concatenate([lift_off.slip, np.zeros(len(planned.xd_b) - 3)]))
+    reaim_steps = lift_off.reaim_steps if lift_off is not None else None
     reachable, miss = planned.reachable()
     for again in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
         if feedback.reaim:
