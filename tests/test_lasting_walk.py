@@ -11,7 +11,8 @@ import pytest
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.walking.events import DOUBLE_SUPPORT, CouldNotStart, Finished, Sample
-from biped_gait.core.walking.held_support import LEAST_NORMAL_FORCE, PUSH_OFF, lasting_orbit, walking_request
+from biped_gait.core.gait.lasting import WALK_LEAST_NORMAL_FORCE, WALK_PUSH_OFF, LastingRequest
+from biped_gait.core.walking.held_support import lasting_orbit
 from biped_gait.core.walking.orbit import PlannedOrbit
 from biped_gait.core.walking.runner import Walker
 from biped_gait.core.walking.walk import Walk
@@ -25,7 +26,7 @@ STEPS = 20
 def walked():
     planner = GaitPlanner(modes=("normal",))
     gait = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5)))
-    support = planner.lasting.periodic(gait, walking_request(DURATION))
+    support = planner.lasting.periodic(gait, LastingRequest.walkable(DURATION))
     assert support.success, support.message
     orbit = lasting_orbit(PlannedOrbit.of(gait), support, planner.hybrid)
     walker = Walker(planner.hybrid, orbit, RATE)
@@ -36,10 +37,10 @@ def test_the_walked_plan_keeps_its_margins(walked):
     """The plan to walk keeps each foot pressing by the margin, the reactions within mu - 0.1, and
     the old foot pushing off at I^+ by at least the margin, within mu - 0.1."""
     support, _, _ = walked
-    assert support.contact_forces[..., 2].min() >= LEAST_NORMAL_FORCE - 1e-6 * 500
+    assert support.contact_forces[..., 2].min() >= WALK_LEAST_NORMAL_FORCE - 1e-6 * 500
     assert support.friction_used <= 0.4 + 1e-6
     push = support.push_off
-    assert push[2] >= PUSH_OFF - 1e-6 * 50 and np.hypot(push[0], push[1]) <= 0.4 * push[2] + 1e-6 * 50
+    assert push[2] >= WALK_PUSH_OFF - 1e-6 * 50 and np.hypot(push[0], push[1]) <= 0.4 * push[2] + 1e-6 * 50
 
 
 def test_the_first_steps_walk_with_both_feet_down(walked):

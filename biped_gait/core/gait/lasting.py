@@ -73,6 +73,13 @@ IMPULSE_TIME = 0.1  # s: a reaction impulse's scale is the weight over this long
 CORRECTION = 1e-6  # m, m/s: the collocation defects' corrections along the held rows (the rule's error)
 NEGLIGIBLE = 1e-7  # of a reaction's scale: below it a reaction is the solver's tolerance, not a force
 KINDS = ("periodic", "stop", "start", "limit")
+# The margins a walked plan keeps (``LastingRequest.walkable``). Without them the least-effort plan
+# rides its constraints (a foot's normal force down to 0, the friction used 0.49 of 0.5, the old foot
+# leaving passively) and a walk that tracks it loses a foot, or its lift-off, at its first errors
+# (docs/model.md 14.1). At the default gait and d = 0.1 s they cost E = 63.27 against 62.50 N m s.
+WALK_LEAST_NORMAL_FORCE = 50.0  # N: about a tenth of the weight, on each foot throughout
+WALK_FRICTION_MARGIN = 0.1  # the reactions and impulses within mu - 0.1
+WALK_PUSH_OFF = 2.0  # N s: the old foot's least vertical impulse at I^+ (the weight over 4 ms)
 # IPOPT started at a nearby solution with its multipliers: the barrier parameter from near its end,
 # the point pushed off its bounds by as little as the multipliers are.
 WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipopt.warm_start_bound_push": 1e-9,
@@ -93,6 +100,12 @@ class LastingRequest:
     least_normal_force: float = 0.0
     friction_margin: float = 0.0
     push_off: float = 0.0
+
+    @classmethod
+    def walkable(cls, duration: float, effort: str = "l1") -> "LastingRequest":
+        """The double support of ``duration`` s with the margins a walk tracking it needs
+        (``WALK_LEAST_NORMAL_FORCE``, ``WALK_FRICTION_MARGIN``, ``WALK_PUSH_OFF``)."""
+        return cls(duration, effort, WALK_LEAST_NORMAL_FORCE, WALK_FRICTION_MARGIN, WALK_PUSH_OFF)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.duration) and self.duration >= 0.0):

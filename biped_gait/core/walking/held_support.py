@@ -34,18 +34,6 @@ from ..dynamics.settings import DEFAULTS, Settings
 from .balance import effort_limits, linearization, lqr_gain, minimal_basis
 from .orbit import PlannedOrbit
 
-# The margins a walked plan keeps (``lasting.LastingRequest``): without them the least-effort plan
-# rides its constraints (a foot's normal force down to 0, the friction used 0.49 of 0.5), and the
-# tracking's first errors lift or slide a foot. At the default gait and d = 0.1 s they cost
-# E = 63.20 against 62.50 N m s.
-LEAST_NORMAL_FORCE = 50.0  # N: about a tenth of the weight, on each foot throughout
-FRICTION_MARGIN = 0.1  # the reactions within mu - 0.1
-# N s: the old foot pushes off at I^+ with at least this vertical impulse (the weight over 4 ms).
-# The lift-off's feedback varies the push-off about it; with none planned (the paper's passive
-# lift-off) every deviation that asks the leaving foot to pull is infeasible, and the walk lost the
-# fourth lift-off. It costs E = 63.27 against 63.20 N m s at the default gait and d = 0.1 s.
-PUSH_OFF = 2.0
-
 # Bryson's weights of the tracking: the lift-off's state error is amplified about 150-fold by the
 # next ballistic step, whose re-aim converges from a few mrad; standing's 0.1 rad and 1 rad/s left
 # 2 mrad and 13 mrad/s at the lift-off of the default gait, too far for the re-aim's chord steps.
@@ -93,14 +81,6 @@ class HeldSupport:
         basis = self.basis[k]
         error = np.concatenate([basis.T @ (q - q_ref), basis.T @ (qd - qd_ref)])
         return np.clip(torque - self.gain[k] @ error, -self.limits, self.limits)
-
-
-def walking_request(duration: float, effort: str = "l1"):
-    """The ``LastingRequest`` of a double support to walk: ``duration`` (s), ``effort``, and the
-    walk's margins (``LEAST_NORMAL_FORCE``, ``FRICTION_MARGIN``, ``PUSH_OFF``)."""
-    from ..gait.lasting import LastingRequest  # CasADi's import only where a lasting plan is made
-
-    return LastingRequest(duration, effort, LEAST_NORMAL_FORCE, FRICTION_MARGIN, PUSH_OFF)
 
 
 def held_support(chain: ClosedChain, support) -> HeldSupport:
