@@ -32,7 +32,7 @@ READINGS = {
 RATE_BOUNDS = (math.inf, 30.0, 25.0, 20.0, 15.0, 12.0, 10.0, 8.0)  # rad/s
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Readings:
     """Per reading (``READINGS``' labels), the mode comparison at each of ``PAPER_POINTS``."""
 

@@ -66,7 +66,7 @@ class Optimum:
         return self.other_W / self.W
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WalkingMaps:
     """The maps of one parameter set and ``mode``: the region per atlas (L, T) node (category
     names), the boundary (L, T_min) pairs, and the optima on the coarser grid; ``margins``

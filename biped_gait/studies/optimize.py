@@ -41,7 +41,7 @@ class NoAdmissibleGait(RuntimeError):
     """No gait of the coarse sweep converged to an admissible gait: there is nothing to minimize."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ArmOptimum:
     """The least effort over an arm-amplitude range ``alpha_range`` (rad) for one gait problem.
 
@@ -173,7 +173,7 @@ def _refine(
     minimize_scalar(effort, bounds=bracket, method="bounded", options={"xatol": DEFAULTS.arm_tolerance})
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ModeComparison:
     """The optimum of one mode (``optimum``, the normal gait's in the paper's comparison) and
     the other mode's gait at the same alpha (``other``; full gaits)."""

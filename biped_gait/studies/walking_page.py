@@ -70,7 +70,7 @@ class RampStep:
     transition_seconds: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Walking:
     """What the section shows: the Fig. 4 gaits (with their multipliers), the closed loops, the
     push limits (steered, and plain at alpha*), alpha* (rad), the ramp and the speed rule."""

@@ -26,7 +26,7 @@ CLOSURES = ("theta", "slack")
 _MESSAGES = {newton.DIVERGED: "the integration diverged (non-finite state)", newton.SINGULAR: "singular shooting Jacobian"}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BvpSolution:
     """Result of the shooting (the gait's ballistic step): always returned, ``converged`` says
     whether to trust it. Angles rad, velocities rad/s, ``closure_gap`` kg m^2/s."""

@@ -58,7 +58,7 @@ class GaitProblem:
         return replace(self.options, rate_bound=math.inf)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DoubleSupport:
     """The instantaneous double support of a gait (docs/model.md sections 4 and 6).
 
@@ -94,7 +94,7 @@ class DoubleSupport:
         return abs(self.h_t_plus[1] - self.h_t_minus[1])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Gait:
     """A solved gait of a model whose vectors are ``names``: ``step`` always; ``double_support``
     and ``figures`` when the BVP converged; the ``verdict``; the solve's wall time (s); how it was ``found`` (``guess``: from
@@ -162,7 +162,7 @@ class Gait:
 
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Stride:
     """A gait on a circle of radius ``radius`` (m, signed: positive turns left): a stride of two
     steps, A on the right foot and B on the left (each a ``Gait`` in its own model coordinates,

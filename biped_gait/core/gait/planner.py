@@ -35,7 +35,7 @@ from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, frictio
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params, names_set
 from .figures import StepFigures, energy_drift, step_figures
-from .grid import Grid
+from .grid import PlanGrids
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import SpeculativeFlow
@@ -211,9 +211,9 @@ class GaitPlanner:
         self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
         self.hybrid = HybridStep(self.model)
-        self.grid = Grid.of(self.hybrid, settings.fine_steps, settings.coarse_steps)
+        self.grid = PlanGrids.of(self.hybrid, settings.fine_steps, settings.coarse_steps)
         self.flow, self.coarse_flow = self.grid.flow, self.grid.coarse
-        self._refined: dict[int, Grid] = {}  # the finer grids plans were refined to, by steps
+        self._refined: dict[int, PlanGrids] = {}  # the finer grids plans were refined to, by steps
         for mode in GaitMode if modes is None else map(GaitMode.parse, modes):
             self._atlases[mode] = self._load_atlas(mode)
 
@@ -349,7 +349,7 @@ class GaitPlanner:
         return self._refining(lambda grid, start, coarser: self._stride_on(grid, problem, start, found, stability,
                                                                           coarser), guess)
 
-    def _stride_on(self, grid: Grid, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
+    def _stride_on(self, grid: PlanGrids, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
                    coarser: Stride | None = None, estimate: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess`` on ``grid``, its closures matched
         to what the spin moments do (legs leaning), with its steps' integration errors if
@@ -555,16 +555,16 @@ class GaitPlanner:
         return self._refining(lambda grid, start, coarser: self._solve_on(grid, problem, start, found, coarser), guess,
                               self._grid(steps))
 
-    def _grid(self, steps: int) -> Grid:
+    def _grid(self, steps: int) -> PlanGrids:
         """The planner's grid, or one of ``steps`` per T if that is finer (Newton's iterations on
         half as many)."""
         if steps <= self.grid.steps:
             return self.grid
         if steps not in self._refined:
-            self._refined[steps] = Grid.of(self.hybrid, steps, steps // 2)
+            self._refined[steps] = PlanGrids.of(self.hybrid, steps, steps // 2)
         return self._refined[steps]
 
-    def _refining(self, solve: Callable[[Grid, Any, Any], Gait | Stride], guess: Any, grid: Grid | None = None
+    def _refining(self, solve: Callable[[PlanGrids, Any, Any], Gait | Stride], guess: Any, grid: PlanGrids | None = None
                   ) -> Gait | Stride:
         """``solve(grid, guess, None)`` on ``grid`` (default: the planner's), and again on grids of
         twice as many steps (up to ``REFINEMENTS`` doublings of the planner's grid, each from the
@@ -583,7 +583,7 @@ class GaitPlanner:
             result = refined
         return result
 
-    def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
+    def _solve_on(self, grid: PlanGrids, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
                   found: str, coarser: Gait | None = None) -> Gait:
         """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error
         (against ``coarser``, the gait on the estimate's grid, if solved already)."""
@@ -613,7 +613,7 @@ class GaitPlanner:
             gait = replace(gait, stability=self._multipliers(grid, problem, step, gait.double_support.impulses, flow))
         return gait
 
-    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
+    def _integration_error(self, grid: PlanGrids, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
         """``gait``, solved on ``grid``, with its integration error: against ``coarser``, the gait
         on the estimate's grid, or (None) its step's solution on that grid (the shooting's coarse
         one, else its step solved again there from its own solution, with the same closure),
@@ -635,8 +635,8 @@ class GaitPlanner:
         """The settings of a plan solved again on its estimate's grid (``ESTIMATE_ITERATIONS``)."""
         return replace(self.settings, max_iterations=ESTIMATE_ITERATIONS)
 
-    def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...], coarse: tuple[Gait, ...] | None,
-                   again: Callable[[], tuple[Gait, ...]]) -> tuple[Gait, ...]:
+    def _estimated(self, grid: PlanGrids, problem: GaitProblem, plans: tuple[Gait, ...],
+                   coarse: tuple[Gait, ...] | None, again: Callable[[], tuple[Gait, ...]]) -> tuple[Gait, ...]:
         """The steps of a plan (``plans``, on ``grid``) with their integration errors
         (``richardson``): against ``coarse``, the same steps on the estimate's grid, if solved
         already; else against ``again()``, the plan solved again there, unless an end point already
@@ -648,7 +648,7 @@ class GaitPlanner:
         return tuple(replace(plan, accuracy=richardson.estimate(plan, other, end, grid.ratio))
                      for plan, other, end in zip(plans, coarse or (None,) * len(plans), ends))
 
-    def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
+    def _multipliers(self, grid: PlanGrids, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
         """The open-loop multipliers of the solved ``step`` with its ``impulses``, from ``flow``,
         the step's variational flow on ``grid`` begun on the background thread (waited for here)."""

@@ -31,7 +31,7 @@ from .turning import TurningConfiguration
 FD_STEP = 1e-6  # rad: the configurations' theta derivatives
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StrideSolution:
     """The two steps of a stride (A on the right foot, B on the left, each in its own model
     coordinates) as ballistic-step solutions, and the outcome of their joint solve."""

@@ -95,7 +95,7 @@ def pulse(hybrid: HybridStep, q: np.ndarray, qd: np.ndarray, torque: np.ndarray,
     return q, qd, np.array(forces)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Impact:
     """The passive impact at a touchdown configuration: the velocity after it (X coordinates), the
     reaction impulse at the new stance foot (N s, world axes of the step) and the old stance foot's
@@ -137,7 +137,7 @@ def friction_ratio(forces: np.ndarray) -> float:
     return float(np.max(np.where(fz > 0, horizontal / np.where(fz > 0, fz, 1.0), np.inf)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class FiniteSupport:
     """A periodic gait with a double support of ``duration`` d (s): the step's start just after the
     leg exchange (q0, v0), its touchdown (q_t, and qd_t just before the impact), the trunk pitch

@@ -1,0 +1,104 @@
+"""Values a reader can trust: every frozen dataclass that holds arrays compares and hashes by
+identity (``eq=False``), so that ``==`` on two of them answers instead of raising numpy's
+ValueError; and one name means one class in the package."""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import importlib
+import pkgutil
+import re
+import sys
+from collections import defaultdict
+from dataclasses import replace
+from pathlib import Path
+
+import biped_gait
+
+from .conftest import DEFAULT_REQUEST
+
+PACKAGE = Path(biped_gait.__file__).parent
+ARRAY = re.compile(r"\b(ndarray|NDArray)\b")
+
+
+def _dataclasses() -> list[type]:
+    """Every dataclass defined in the package, its modules all imported (rclpy's too: the venv
+    has it)."""
+    found = []
+    for info in pkgutil.walk_packages(biped_gait.__path__, "biped_gait."):
+        module = importlib.import_module(info.name)
+        found += [value for value in vars(module).values() if isinstance(value, type)
+                  and dataclasses.is_dataclass(value) and value.__module__ == module.__name__]
+    return found
+
+
+def _without_callables(annotation: str) -> str:
+    """``annotation`` without its ``Callable[...]`` parts (a function of a gait holds no gait)."""
+    while (start := annotation.find("Callable[")) >= 0:
+        depth, end = 0, start + len("Callable")
+        for end in range(end, len(annotation)):
+            depth += {"[": 1, "]": -1}.get(annotation[end], 0)
+            if depth == 0:
+                break
+        annotation = annotation[:start] + annotation[end + 1:]
+    return annotation
+
+
+def holds_arrays(cls: type, seen: frozenset = frozenset()) -> bool:
+    """Whether a field of the dataclass ``cls`` is annotated as an array (``np.ndarray`` in its
+    annotation), or as a dataclass that holds arrays (named in the annotation, as its module
+    names it)."""
+    names = vars(sys.modules[cls.__module__])
+    for field in dataclasses.fields(cls):
+        annotation = _without_callables(field.type if isinstance(field.type, str) else repr(field.type))
+        if ARRAY.search(annotation):
+            return True
+        for name in re.findall(r"[A-Za-z_]\w*", annotation):
+            other = names.get(name)
+            if (isinstance(other, type) and dataclasses.is_dataclass(other) and other not in seen | {cls}
+                    and holds_arrays(other, seen | {cls})):
+                return True
+    return False
+
+
+def test_frozen_dataclasses_that_hold_arrays_compare_by_identity():
+    """The one rule: a frozen dataclass holding arrays, directly or in the dataclasses its fields
+    name, is declared ``eq=False`` (``==`` is identity, ``hash`` the object's); a generated
+    ``__eq__`` would compare arrays and raise ValueError, a generated ``__hash__`` TypeError."""
+    holding = [cls for cls in _dataclasses() if cls.__dataclass_params__.frozen and holds_arrays(cls)]
+    names = {f"{cls.__module__}.{cls.__qualname__}" for cls in holding}
+    # The walk finds what it must: arrays directly, through a field's dataclass, and in ROS nodes.
+    assert {"biped_gait.core.gait.bvp.BvpSolution", "biped_gait.core.gait.gait.Gait",
+            "biped_gait.ros.push_service.ScriptedPush"} <= names
+    generated = sorted(f"{cls.__module__}.{cls.__qualname__}" for cls in holding
+                       if cls.__dataclass_params__.eq or cls.__eq__ is not object.__eq__)
+    assert not generated, f"frozen dataclasses over arrays without eq=False: {generated}"
+
+
+def test_two_plans_compare_by_identity(planner, default_gait):
+    """``==`` on plans answers (no ValueError) by identity: a plan is itself, a copy of it or the
+    same request solved again is another plan; plans hash, so they can key a dict."""
+    again = planner.plan(DEFAULT_REQUEST)
+    assert again.converged and default_gait.converged
+    assert default_gait == default_gait
+    assert default_gait != again
+    assert default_gait != replace(default_gait)
+    assert default_gait != default_gait.without_samples()
+    assert default_gait.double_support != again.double_support
+    assert default_gait.step != again.step
+    assert len({default_gait, again, default_gait}) == 2
+    assert {default_gait: 1}[default_gait] == 1
+
+
+def test_one_name_is_one_class():
+    """No two classes of the package share a name (a reader, or an import, cannot take one for
+    the other)."""
+    where = defaultdict(list)
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.ClassDef):
+                where[node.name].append(str(path.relative_to(PACKAGE)))
+    assert len(where) > 100
+    shared = {name: paths for name, paths in where.items() if len(paths) > 1}
+    assert not shared, f"class names used twice: {shared}"
