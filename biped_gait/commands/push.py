@@ -13,7 +13,7 @@ from ..core.model.params import load_params
 from ..studies import push_study
 from ..studies.executors import open_executor
 from ..studies.figures import save
-from ..studies.optimize import optimal_arm_amplitude
+from ..core.gait.arm_optimum import optimal_arm_amplitude
 from .output import check_json, write_json
 
 

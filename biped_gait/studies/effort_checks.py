@@ -19,7 +19,8 @@ from matplotlib.figure import Figure
 from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from .executors import planner_for
-from .optimize import COARSE_STEP, ModeComparison, compare_modes
+from ..core.gait.arm_optimum import COARSE_STEP
+from .mode_comparison import ModeComparison, compare_modes
 
 PAPER_POINTS = ((0.40, 0.45), (0.45, 0.45), (0.50, 0.45))  # (L m, T s)
 # The readings compared: label -> GaitRequest fields.

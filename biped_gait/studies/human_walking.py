@@ -21,7 +21,7 @@ from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from ..core.walking.world import WorldView
 from .executors import planner_for
-from .optimize import COARSE_STEP, optimal_arm_amplitude
+from ..core.gait.arm_optimum import COARSE_STEP, optimal_arm_amplitude
 
 # Collins et al. (2009): metabolic cost increase over normal arm swing (%), and the vertical
 # angular momentum's increase without arm swing (%).

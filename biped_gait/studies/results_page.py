@@ -26,7 +26,7 @@ from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
 from .human_walking import human_comparison
 from .maps import MAP_STRIDE, WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
-from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
+from ..core.gait.arm_optimum import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines

@@ -34,7 +34,7 @@ from .executors import planner_for
 from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushLimit, limit_vs_alpha_figure, polar_figure,
                          run_push_study)
 from .study import FIG4_STEP_LENGTHS, FIG5_CASE, Study
-from .sweep import inclusive_range
+from ..core.gait.chains import inclusive_range
 
 ALPHA_STEP = math.radians(5.0)  # rad: the default spacing of the alphas of the closed loops and the pushes
 AXIS_DIRECTIONS = ("forward", "backward", "left", "right")

@@ -16,7 +16,7 @@ import numpy as np
 
 from .accuracy import IntegrationError
 from .admissibility import Verdict, failure_message
-from .bvp import BvpSolution
+from .bvp import BvpSolution, StepProblem
 from .configurations import GaitMode
 from ..dynamics.impulses import EffortOptions, ImpulseSolution
 from ..model.biped import CoordinateNames
@@ -56,6 +56,12 @@ class GaitProblem:
     def limit_options(self) -> EffortOptions:
         """The options of the limits alone: the friction cone at mu, no joint-rate bound."""
         return replace(self.options, rate_bound=math.inf)
+
+    def bvp(self, closure_target: float = 0.0) -> StepProblem:
+        """The shooting problem of its step (``bvp.solve_bvp``), the closure gap made
+        ``closure_target`` (kg m^2/s)."""
+        return StepProblem(self.step_length, self.period, self.arm_amplitude, self.mode, self.closure,
+                           self.step_width, closure_target)
 
 
 @dataclass(frozen=True, eq=False)

@@ -25,7 +25,7 @@ import numpy as np
 
 from .admissibility import judge
 from .atlas import Atlas, AtlasError, atlas_path, period_runs
-from .bvp import CLOSURES, BvpSolution, solve_bvp
+from .bvp import CLOSURES, BvpSolution, StepProblem, solve_bvp
 from .configurations import GaitMode
 from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
 from ..dynamics.flow import BallisticFlow, FlowResult, hermite_samples
@@ -355,12 +355,14 @@ class GaitPlanner:
         to what the spin moments do (legs leaning), with its steps' integration errors if
         ``estimate`` (against ``coarser``, the stride on the estimate's grid, if solved already;
         else solved again there from this one) and its multipliers if ``stability``."""
-        from .stride import solve_stride  # strides only: a straight plan does without
+        from .stride import StrideProblem, solve_stride  # strides only: a straight plan does without
+
+        stride = StrideProblem(problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
+                               problem.turn_radius)
 
         def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float],
                   settings: Settings = self.settings):
-            return solve_stride(self.hybrid, on, problem.step_length, problem.period, problem.arm_amplitude,
-                                problem.mode, problem.turn_radius, start, settings, coarse, targets)
+            return solve_stride(self.hybrid, on, stride, start, settings, coarse, targets)
 
         targets = np.zeros(2)
         closure = _ClosureRounds()
@@ -433,7 +435,7 @@ class GaitPlanner:
         warm-started from the last, halved where it fails or jumps (``continuation.BRANCH_JUMP``);
         the curvatures (1/m) reached and their strides, the last nearest the request's (the
         start's first: the straight gait's at a vanishing curvature, if no step succeeds)."""
-        from .stride import solve_stride
+        from .stride import StrideProblem, solve_stride
 
         target = 1.0 / problem.turn_radius
         if start is None:
@@ -451,8 +453,9 @@ class GaitPlanner:
             trial = curvature + step * span
             if (trial - target) * span > 0:
                 trial = target
-            solution = solve_stride(self.hybrid, flow, problem.step_length, problem.period, problem.arm_amplitude,
-                                    problem.mode, 1.0 / trial, guess, coarse)
+            on_path = StrideProblem(problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
+                                    1.0 / trial)
+            solution = solve_stride(self.hybrid, flow, on_path, guess, coarse)
             a, b = solution.steps
             if solution.converged and max(np.max(np.abs(a.qd_a - guess[0])), np.max(np.abs(b.qd_a - guess[2]))) <= BRANCH_JUMP:
                 curvature, guess = trial, (a.qd_a, a.theta, b.qd_a, b.theta)
@@ -479,8 +482,8 @@ class GaitPlanner:
                 return self._hinted(first, atlas, problem)
         origin = self._origin(problem, atlas)
         if origin is not None:
-            guess = continue_to(self.hybrid, self.coarse_flow or self.flow, problem.mode, problem.closure, self.settings,
-                                origin[0], origin[1], point, problem.step_width)
+            guess = continue_to(self.hybrid, self.coarse_flow or self.flow, self.settings, origin[0], origin[1],
+                                problem.bvp())
             if guess is not None:
                 gait = self._solve(problem, guess, "continuation")
                 if gait.converged and (gait.admissible or first is None):
@@ -497,7 +500,8 @@ class GaitPlanner:
         index = atlas.nearest(point) if atlas is not None else None
         if index is not None:
             return atlas.grid.point(index), (atlas.nodes["qd_a"][index], float(atlas.nodes["theta"][index]))
-        step = solve_bvp(self.hybrid, self.flow, *SEED, problem.mode, problem.closure, None, self.settings, self.coarse_flow)
+        step = solve_bvp(self.hybrid, self.flow, StepProblem(*SEED, problem.mode, problem.closure), None, self.settings,
+                         self.coarse_flow)
         return (SEED, (step.qd_a, step.theta)) if step.converged else None
 
     def _hinted(self, gait: Gait, atlas: Atlas | None, problem: GaitProblem) -> Gait:
@@ -588,9 +592,7 @@ class GaitPlanner:
         """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error
         (against ``coarser``, the gait on the estimate's grid, if solved already)."""
         shooting = SpeculativeFlow(grid.flow, grid.background)
-        step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                         problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width,
-                         with_coarse=True)
+        step = solve_bvp(self.hybrid, shooting, problem.bvp(), guess, self.settings, grid.coarse, with_coarse=True)
         flow = self._variational_flow(problem, step, shooting)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
@@ -600,9 +602,8 @@ class GaitPlanner:
                     abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
                 break  # nothing to match: the spin moments change nothing (or the closure already matches)
             shooting = SpeculativeFlow(grid.flow, grid.background)
-            step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, grid.coarse,
-                             problem.step_width, closure_target=-ds.foot_line_moment, with_coarse=True)
+            step = solve_bvp(self.hybrid, shooting, problem.bvp(-ds.foot_line_moment), (step.qd_a, step.theta),
+                             self.settings, grid.coarse, with_coarse=True)
             flow = self._variational_flow(problem, step, shooting)
             gait = self.step_gait(problem, step, found)
         else:
@@ -621,9 +622,8 @@ class GaitPlanner:
         def again() -> tuple[Gait]:
             step, near = gait.step, gait.double_support and gait.double_support.impulses
             if step.coarse is None:  # a grid without a coarse flow (its estimate's is then half of it)
-                step = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
-                                 problem.mode, problem.closure, (step.qd_a, step.theta), self._estimate_settings, None,
-                                 problem.step_width, closure_target=step.closure_gap)
+                step = solve_bvp(self.hybrid, grid.estimate, problem.bvp(step.closure_gap), (step.qd_a, step.theta),
+                                 self._estimate_settings, None)
             else:
                 step = step.coarse
             return self.step_gait(problem, step, gait.found, near=near),

@@ -42,7 +42,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..gait.atlas import Atlas, AtlasError, atlas_path
-from ..gait.bvp import solve_bvp
+from ..gait.bvp import StepProblem, solve_bvp
 from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
 from .speed import MAX_SLOPE, MIN_AUTHORITY, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
@@ -332,7 +332,7 @@ class SpeedFollower:
             guesses.insert(0, atlas_guess)
         message = "no warm start"
         for guess in guesses:
-            step = solve_bvp(hybrid, flow, step_length, period, current.arm_amplitude, current.mode, "theta", guess,
+            step = solve_bvp(hybrid, flow, StepProblem(step_length, period, current.arm_amplitude, current.mode), guess,
                              self.settings, coarse)
             if not (step.converged and float(np.max(np.abs(step.qd_a - guess[0]))) <= BRANCH_BOUND):
                 message = step.message if not step.converged else "the solve left the human-like branch"
