@@ -1,7 +1,8 @@
 """Values a reader can trust: every frozen dataclass that holds arrays compares and hashes by
 identity (``eq=False``), so that ``==`` on two of them answers instead of raising numpy's
-ValueError; one name means one class in the package; and a function takes its problem as one
-value rather than a long list of arguments."""
+ValueError; one name means one class in the package; a function takes its problem as one value
+rather than a long list of arguments; and what the planner and the simulator run is not among
+the studies."""
 
 from __future__ import annotations
 
@@ -146,3 +147,27 @@ def test_functions_take_at_most_eight_parameters():
     over = {name for name, count in counts.items() if count > PARAMETER_BUDGET}
     assert over - OVER_BUDGET.keys() == set(), "over the parameter budget: pass the problem as one value"
     assert OVER_BUDGET.keys() - over == set(), "no longer over the budget: take it off OVER_BUDGET"
+
+
+def test_the_core_the_nodes_and_the_recordings_import_no_study():
+    """Production code lives outside ``studies/``: the core, the ROS nodes, the recordings, the
+    analysis and the CLI's shared parts import no study (only the CLI verbs that run one do,
+    ``commands/``)."""
+    importers = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        where = path.relative_to(PACKAGE)
+        if where.parts[0] in ("studies", "commands"):
+            continue
+        package = ".".join(("biped_gait", *where.parent.parts))
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                base = package.split(".")[:len(package.split(".")) - node.level + 1] if node.level else []
+                module = ".".join([*base, node.module or ""]) if node.level else node.module
+                names = [f"{module}.{alias.name}" for alias in node.names]
+            elif isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            else:
+                continue
+            if any(name.startswith("biped_gait.studies") for name in names):
+                importers.append(str(where))
+    assert not importers, f"production code importing a study: {importers}"
