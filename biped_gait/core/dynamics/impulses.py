@@ -343,20 +343,23 @@ def friction_ratios(solution: ImpulseSolution) -> np.ndarray:
     return out
 
 
+def pyramid(friction: float) -> np.ndarray:
+    """The inscribed octagonal pyramid of the friction cone of coefficient ``friction`` (section
+    4.4): rows G (CONE_SIDES x 3) with G f <= 0 for a force or impulse f = [fx, fy, fz] inside it,
+    cos(a) fx + sin(a) fy <= mu cos(pi/8) fz for eight directions a; none for mu = inf."""
+    if not math.isfinite(friction):
+        return np.zeros((0, 3))
+    angles = 2 * np.pi * np.arange(CONE_SIDES) / CONE_SIDES
+    return np.column_stack([np.cos(angles), np.sin(angles), np.full(CONE_SIDES, -friction * math.cos(math.pi / CONE_SIDES))])
+
+
 def _cone_rows(options: EffortOptions, layout: ImpactLayout) -> np.ndarray:
-    """Rows G x <= 0 of the inscribed octagonal pyramid of the friction cone on each reaction
-    impulse: cos(a) Ix + sin(a) Iy <= mu cos(pi/8) Iz for eight directions a (none for mu = inf)."""
-    if not math.isfinite(options.friction):
-        return np.zeros((0, layout.unknowns))
-    rows = []
-    apothem = options.friction * math.cos(math.pi / CONE_SIDES)
-    for sl in layout.reactions:
-        for k in range(CONE_SIDES):
-            angle = 2 * math.pi * k / CONE_SIDES
-            row = np.zeros(layout.unknowns)
-            row[sl.start: sl.start + 3] = (math.cos(angle), math.sin(angle), -apothem)
-            rows.append(row)
-    return np.array(rows)
+    """Rows G x <= 0 of the pyramid (``pyramid``) on each reaction impulse of the unknowns x."""
+    sides = pyramid(options.friction)
+    rows = np.zeros((len(sides) * len(layout.reactions), layout.unknowns))
+    for k, sl in enumerate(layout.reactions):
+        rows[k * len(sides):(k + 1) * len(sides), sl.start:sl.start + 3] = sides
+    return rows
 
 
 def _unknown_bounds(options: EffortOptions, layout: ImpactLayout) -> tuple[np.ndarray, np.ndarray]:

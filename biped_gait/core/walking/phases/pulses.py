@@ -12,7 +12,7 @@ of a passive impact, with the walk's re-aim as the feedback. Its phases:
 
 **The plan** (``Coast``'s reset). From the engine's state it predicts the ballistic touchdown with
 the planner's flow and guard, and hands that pre-impact state to the impulsive double support's
-reset (``impulsive.impulsive_double_support``): the re-aim of the next step (with momentum
+reset (``reaim.impulsive_double_support``): the re-aim of the next step (with momentum
 steering if the walk has it) and the LP's impulses I^-, I^+, exactly as the impulsive walk does at
 its touchdown. The pulses u = I / (d / 2) reach that re-aimed next step only as d -> 0: the
 configuration moves during them (the joints at up to 16 rad/s), and the open-loop step amplifies
@@ -42,7 +42,8 @@ from ..engines.engine import Motion, Pulse
 from ..events import Fall, Touchdown
 from ..finite_support import FD_STEP, FiniteSupportFailed, cone_rows, friction_ratio, gauss_newton, passive_impact, pulse
 from ..state import Aim, WalkState
-from .impulsive import impulsive_double_support, single_support_guard
+from .impulsive import single_support_guard
+from .reaim import impulsive_double_support
 from .phase import TIME_TOLERANCE, TOUCHDOWN, End, Guard, Phase, Transition, WalkContext
 
 DECISION_LEAD = 0.01  # s: the double support is planned this long before its pre-impact pulse is due
