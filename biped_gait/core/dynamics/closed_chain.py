@@ -34,7 +34,6 @@ from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
-from scipy.optimize import minimize_scalar
 
 from ..model.biped import SWING_TIP, BipedModel
 from .hybrid import contact_jacobians
@@ -155,6 +154,7 @@ class ClosedChain:
         each ratio is convex in the share while both feet press)."""
         if not self.lateral_free:
             return self.wrenches(q, qd, qdd, held)
+        from scipy.optimize import minimize_scalar  # SciPy's optimizers only where a walk holds both feet
 
         def at(lateral: float) -> np.ndarray:
             return self.wrenches(q, qd, qdd, self.full_force(held, lateral))

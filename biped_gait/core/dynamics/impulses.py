@@ -160,7 +160,7 @@ def absolute_reading(bm: BipedModel) -> tuple[tuple[float, ...], ...]:
     return tuple(rows)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImpactProblem:
     """The data of one double support: D_e, J1, J2 at q(T), Xd^b, Xd^a, z_d, and the layout."""
 
@@ -237,7 +237,7 @@ class EffortOptions:
         return layout.absolute if self.coordinates == "absolute" else np.eye(layout.na)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImpulseSolution:
     """The chosen solution of eqs. (6)-(10); ``success`` False carries the solver's reason."""
 
@@ -389,7 +389,7 @@ def _finish(problem: ImpactProblem, equations: Equations, effort_name: str, opti
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Effort:
     """The parts of the effort LP that depend only on the options and the layout: its variables
     are x (the layout's unknowns), then t (one per reading row of I^- and of I^+) bounding the absolute values summed; cost
@@ -428,7 +428,7 @@ def _effort_parts(options: EffortOptions, layout: ImpactLayout) -> _Effort:
                    np.concatenate([upper, np.full(n_t, np.inf)]), abs_rows, cone)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _L1Program:
     """The effort LP in (x, t): minimize ``parts.cost`` (x, t) = sum(t) subject to
     a_ub (x, t) <= b_ub, a_eq (x, t) = b_eq and the parts' bounds. ``a`` and ``b`` hold the

@@ -12,7 +12,7 @@ from ..dynamics.impulses import EffortOptions
 from ..gait.configurations import GaitMode
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PlannedOrbit:
     """What a walk needs of a plan: the parameter set (name or file), the gait's L (m), T (s),
     alpha (rad), mode, effort, the boundary configurations q0 and q_t (rad), the velocities

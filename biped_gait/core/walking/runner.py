@@ -56,7 +56,7 @@ def prepare_walking() -> None:
     import scipy.optimize  # noqa: F401
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PhaseRun:
     """One phase as the runner walked it: its samples, the pushes that acted in it, the events its
     reset returned, and the reason the robot fell ('' if it did not)."""
