@@ -33,8 +33,8 @@ from ..state import WalkState
 from .held import BothFeet
 from .phase import End, Guard, Phase, Transition, WalkContext
 from .reaim import LiftOff, impulsive_double_support
+from .standing import STEP  # the closed chain's integration step (RK4), standing's
 
-STEP = 1e-3  # s: the closed chain's integration step (RK4), as standing's
 PRESS_TOLERANCE = 1e-9  # N s: a held impulse this close to the pyramid's faces is on them (HiGHS's feasibility)
 # The lift-off's re-aim starts from the tracked phase's error (a few tenths of a mrad), which the
 # ballistic step amplifies about 150-fold; its chord steps converge linearly (a factor of 5 to 50
