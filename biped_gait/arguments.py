@@ -132,7 +132,7 @@ def point_values(args: argparse.Namespace, name: str, default_range: tuple[float
     """The values (request units) of the point's axis ``name`` given as a list or a range;
     neither given: ``default_range`` (START, STOP, STEP in the command line's units) if any, else
     the vocabulary's default alone."""
-    from .studies.sweep import inclusive_range  # checked as the sweep checks it
+    from .core.gait.chains import inclusive_range  # checked as the sweep checks it
 
     option = OPTION_BY_NAME[name]
     attr = (option.flag or name).replace("-", "_")

@@ -15,7 +15,7 @@ import pytest
 from biped_gait.core.dynamics.impulses import ZERO_REACTION
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.gait.atlas import NodeStatus
-from biped_gait.core.gait.bvp import solve_bvp
+from biped_gait.core.gait.bvp import StepProblem, solve_bvp
 from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait import planner as planner_module
 from biped_gait.core.gait.accuracy import END_POINT_BOUND, FIGURE_BOUND, FIGURES, SAMPLED, relative_error
@@ -170,8 +170,8 @@ def test_the_shootings_coarse_solution_is_the_estimate_grids_own(planner, solved
     coarse = plan.step.coarse
     assert coarse is not None and coarse.converged and coarse.nodes[0].size == DEFAULTS.coarse_steps + 1
     assert coarse.end_residual <= DEFAULTS.tolerance and abs(coarse.closure_gap) <= DEFAULTS.tolerance
-    again = solve_bvp(planner.hybrid, planner.coarse_flow, request.step_length, request.period, request.arm_amplitude,
-                      request.mode, "theta", plan.warm_start(), DEFAULTS)
+    problem = StepProblem(request.step_length, request.period, request.arm_amplitude, request.mode)
+    again = solve_bvp(planner.hybrid, planner.coarse_flow, problem, plan.warm_start(), DEFAULTS)
     assert again.converged and np.max(np.abs(again.qd_a - coarse.qd_a)) <= 1e-12 * np.max(np.abs(coarse.qd_a))
     assert abs(again.theta - coarse.theta) <= 1e-12
     assert plan.accuracy.figures <= FIGURE_BOUND

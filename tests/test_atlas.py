@@ -16,6 +16,7 @@ import pytest
 
 from biped_gait.core.gait.atlas import Atlas, AtlasError, Grid, NodeStatus, atlas_path, period_runs
 from biped_gait.core.gait.configurations import GaitMode
+from biped_gait.core.gait.bvp import StepProblem
 from biped_gait.core.gait.continuation import continue_to
 from biped_gait.core.gait.fingerprint import code_fingerprint, model_fingerprint
 from biped_gait.core.gait.turning_atlas import TurningAtlas, turning_atlas_path
@@ -34,8 +35,8 @@ COVERAGE = [(L, T, a) for L in (0.33, 0.47, 0.58) for T in (0.37, 0.415, 0.52, 0
 def by_continuation(planner: GaitPlanner, mode: GaitMode, L: float, T: float, alpha: float):
     """The reference: the gait at (L, T, alpha) continued from the human-like seed, no atlas."""
     seed = planner.plan(GaitRequest(*SEED, mode), cold=True)
-    guess = continue_to(planner.hybrid, planner.coarse_flow, mode, "theta", planner.settings, SEED, seed.warm_start(),
-                        (L, T, alpha))
+    guess = continue_to(planner.hybrid, planner.coarse_flow, planner.settings, SEED, seed.warm_start(),
+                        StepProblem(L, T, alpha, mode))
     return None if guess is None else planner.plan(GaitRequest(L, T, alpha, mode), guess)
 
 

@@ -2,7 +2,7 @@
 set and asserted; nothing here is a stored number, and a claim that stops holding fails.
 
 At T = 0.45 s and L = 0.40, 0.45, 0.50 m, the normal gait's W(alpha) is bracketed on a 5 deg
-continuation sweep over [0, 45] deg and refined (``optimize.compare_modes``); the anti-normal
+continuation sweep over [0, 45] deg and refined (``mode_comparison.compare_modes``); the anti-normal
 gait is solved at the normal gait's optimal alpha.
 
 The yaw angular-momentum jump at the double support is |H(T+) - H(T-)| about the vertical
@@ -19,7 +19,8 @@ import pytest
 
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.dynamics.settings import DEFAULTS
-from biped_gait.studies.optimize import ALPHA_RANGE, compare_modes
+from biped_gait.core.gait.arm_optimum import ALPHA_RANGE
+from biped_gait.studies.mode_comparison import compare_modes
 from biped_gait.core.model.params import load_params
 
 pytestmark = pytest.mark.studies

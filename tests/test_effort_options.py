@@ -13,7 +13,7 @@ import pytest
 from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.dynamics.impulses import friction_ratios
 from biped_gait.core.model.params import load_params
-from biped_gait.studies.optimize import compare_modes
+from biped_gait.studies.mode_comparison import compare_modes
 
 from .conftest import DEFAULT_REQUEST
 

@@ -16,7 +16,7 @@ from biped_gait.studies.figures import (effort_figure, momentum_figure, period_f
 from biped_gait.studies.maps import Optimum, WalkingMaps
 from biped_gait.studies.push_study import STUDY_DIRECTIONS, PushLimit, limit_vs_alpha_figure, polar_figure
 from biped_gait.studies.results_page import maps_figures
-from biped_gait.studies.sweep import solve_chain
+from biped_gait.core.gait.chains import solve_chain
 
 from .conftest import DEFAULT_REQUEST
 

@@ -13,7 +13,7 @@ from scipy.optimize import linprog
 
 from biped_gait.core.gait import views
 from biped_gait.core.gait.configurations import GaitMode
-from biped_gait.core.gait.bvp import solve_bvp
+from biped_gait.core.gait.bvp import StepProblem, solve_bvp
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.dynamics.impulses import solve_impulses
@@ -221,7 +221,7 @@ def test_anti_normal_mode_and_table_parameters_also_solve(planner, default_gait)
 
 
 def test_a_solve_that_cannot_converge_says_so(planner):
-    bvp = solve_bvp(planner.hybrid, planner.flow, 0.45, 0.45, 0.4, GaitMode.NORMAL,
+    bvp = solve_bvp(planner.hybrid, planner.flow, StepProblem(0.45, 0.45, 0.4, GaitMode.NORMAL),
                     settings=dataclasses.replace(DEFAULTS, max_iterations=1))
     assert not bvp.converged and "no convergence in 1 Newton iterations" in bvp.message
     extreme = planner.plan(GaitRequest(step_length=1.7, period=0.05, arm_amplitude=1.5, mode="normal"))

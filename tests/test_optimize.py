@@ -9,13 +9,8 @@ import pytest
 
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.dynamics.settings import DEFAULTS
-from biped_gait.studies.optimize import (
-    END_POINT,
-    INTERIOR,
-    NoAdmissibleGait,
-    compare_modes,
-    optimal_arm_amplitude,
-)
+from biped_gait.core.gait.arm_optimum import END_POINT, INTERIOR, NoAdmissibleGait, optimal_arm_amplitude
+from biped_gait.studies.mode_comparison import compare_modes
 from biped_gait.core.model.params import load_params
 
 pytestmark = pytest.mark.studies

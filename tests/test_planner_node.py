@@ -259,7 +259,7 @@ def action_client(ros):
 def test_the_action_reports_progress_and_finds_the_optimum(ros, action_client, planner):
     from action_msgs.msg import GoalStatus
 
-    from biped_gait.studies.optimize import optimal_arm_amplitude
+    from biped_gait.core.gait.arm_optimum import optimal_arm_amplitude
 
     handle, feedback = send_goal(ros, action_client)
     result_future = handle.get_result_async()
@@ -408,7 +408,7 @@ def test_a_default_constructed_goal_optimizes_the_default_gaits_arm_swing(ros, a
 def test_the_action_takes_the_gait_options_and_answers_again_from_its_cache(ros, action_client, planner):
     from action_msgs.msg import GoalStatus
 
-    from biped_gait.studies.optimize import optimal_arm_amplitude
+    from biped_gait.core.gait.arm_optimum import optimal_arm_amplitude
 
     goal = {"friction": math.inf, "alpha_min": math.radians(20.0), "alpha_max": math.radians(35.0)}
     results = []

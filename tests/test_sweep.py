@@ -13,14 +13,8 @@ import pytest
 from biped_gait.studies.executors import open_executor
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.model.params import load_params
-from biped_gait.studies.sweep import (
-    MAX_CASES,
-    SweepGrid,
-    inclusive_range,
-    solve_chain,
-    solve_grid,
-    solve_near,
-)
+from biped_gait.core.gait.chains import inclusive_range, solve_chain, solve_near
+from biped_gait.studies.sweep import MAX_CASES, SweepGrid, solve_grid
 from biped_gait.studies.sweep_output import SweepFiles, csv_columns
 
 from .conftest import DEFAULT_REQUEST

@@ -8,6 +8,7 @@ import csv
 import json
 import math
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ from biped_gait.core.model.params import load_params
 from biped_gait.core.gait.planner import GaitRequest
 from biped_gait.core.walking.steering import DEFAULT_RATE
 from biped_gait.studies.figures import save
-from biped_gait.studies.push_study import MAX_IMPULSE, run_push_study
+from biped_gait.studies.push_study import MAX_IMPULSE, PushedGait, run_push_study
 from biped_gait.studies.walking_page import Walking, closed_loop_radius, speed_ramp, walking_figures, walking_section
 
 pytestmark = pytest.mark.studies
@@ -57,8 +58,9 @@ def test_the_walking_section_and_its_figures(default_gait, planner, tmp_path):
     by_rate = {lp.steering: lp.radius for lp in loops if lp.step_length == 0.45}
     assert 0.98 < by_rate[None] < 1.0 and by_rate[DEFAULT_RATE] == pytest.approx(DEFAULT_RATE, abs=5e-3)
     with ThreadPoolExecutor(2) as executor:
-        pushes = run_push_study(executor, params, 0.45, 0.45, "normal", [(0.0, "left"), (alpha, "left"), (alpha, "right")])
-        plain = run_push_study(executor, params, 0.45, 0.45, "normal", [(alpha, "left")], steering=None)
+        pushed = PushedGait(params, 0.45, 0.45, "normal")
+        pushes = run_push_study(executor, pushed, [(0.0, "left"), (alpha, "left"), (alpha, "right")])
+        plain = run_push_study(executor, replace(pushed, steering=None), [(alpha, "left")])
     assert plain[0].limit < pushes[1].limit
     ramp, rule, note = speed_ramp(params, alpha, (0.9, 1.0), hold=3)
     print(f"\n{rule}; {note}; speeds " + " ".join(f"{s.measured:.3f}" for s in ramp))

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from .summaries import Walk
+from .summaries import WalkRecording
 
 LEG_JOINTS = ("hip", "knee")  # joint-name parts drawn in the legs' panel; the others in the upper body's
 DPI = 120
@@ -24,7 +24,7 @@ def _mark_touchdowns(ax, touchdowns: list[tuple[float, Any]], offset: float = 0.
         ax.axvline(t - offset, color="grey", linestyle=":", linewidth=1.0, label=label if i == 0 else None)
 
 
-def _joint_figure(fig, walk: Walk) -> None:
+def _joint_figure(fig, walk: WalkRecording) -> None:
     """Joint angles (deg) against time, legs above, torso and arms below, touchdowns dotted."""
     legs, upper = fig.subplots(2, 1, sharex=True)
     angles = np.degrees(np.array(walk.joint_positions))
@@ -40,7 +40,7 @@ def _joint_figure(fig, walk: Walk) -> None:
     legs.set_title(f"Joint angles over {len(walk.touchdowns())} steps")
 
 
-def _momentum_figure(fig, walk: Walk) -> None:
+def _momentum_figure(fig, walk: WalkRecording) -> None:
     """Yaw angular momentum about the stance foot over the first two successive steps, the
     double support (instantaneous, at the touchdown) marked; time from the first step's start."""
     ax = fig.add_subplot()
@@ -61,7 +61,7 @@ def _momentum_figure(fig, walk: Walk) -> None:
     ax.legend(fontsize="small")
 
 
-def _top_view_figure(fig, walk: Walk) -> None:
+def _top_view_figure(fig, walk: WalkRecording) -> None:
     """The centre of mass's path and the stance feet, x-y plane of the world (m); the y axis
     spans the data (a walk is metres long and centimetres wide: at equal scales its sway would
     be a flat line), as its label says."""
@@ -86,7 +86,7 @@ def _top_view_figure(fig, walk: Walk) -> None:
     fig.legend(fontsize="small", loc="outside lower center", ncols=3)  # below: the feet's labels fill the plot
 
 
-def write_plots(walk: Walk, out_dir: Path) -> list[Path]:
+def write_plots(walk: WalkRecording, out_dir: Path) -> list[Path]:
     """The walk's PNG plots in ``out_dir`` (those its data allow); returns their paths."""
     plots = []
     if walk.joint_time:

@@ -20,7 +20,7 @@ from ..recording.topics import ANGULAR_MOMENTUM, GAIT_EVENTS, JOINT_STATES, MODE
 
 
 @dataclass
-class Walk:
+class WalkRecording:
     """The samples and events of a walk recording. Times in s from the walk's first sample (its
     start), which is ``start`` s after the recording's first message."""
 
@@ -47,12 +47,12 @@ class Walk:
         return starts
 
 
-def read_walk(bag: Bag) -> Walk | None:
+def read_walk(bag: Bag) -> WalkRecording | None:
     """The walk in ``bag`` (None if it has none of the walk's topics)."""
     topics = [t for t in (JOINT_STATES, ANGULAR_MOMENTUM, GAIT_EVENTS) if t in bag.topics()]
     if not topics:
         return None
-    walk = Walk()
+    walk = WalkRecording()
     for topic, t, msg in bag.decoded(topics):
         if topic == JOINT_STATES:
             walk.joint_names = walk.joint_names or list(msg.name)
@@ -76,7 +76,7 @@ def read_walk(bag: Bag) -> Walk | None:
     return walk
 
 
-def walk_summary(walk: Walk) -> dict:
+def walk_summary(walk: WalkRecording) -> dict:
     """Steps (one per touchdown event: its time, W, state error, velocity miss), pushes, falls, end."""
     steps = [{
         "step": e.step,
@@ -130,7 +130,7 @@ def planner_summary(bag: Bag) -> dict | None:
     }
 
 
-def summarize(bag: Bag) -> tuple[dict, Walk | None]:
+def summarize(bag: Bag) -> tuple[dict, WalkRecording | None]:
     """The summary of ``bag`` (JSON-ready) and its walk, if it holds one."""
     walk = read_walk(bag)
     summary = {

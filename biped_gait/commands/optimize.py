@@ -13,7 +13,7 @@ from ..arguments import alpha_range, check_output_folder, request_fields
 from ..core.gait import views
 from ..core.gait.gait import Gait
 from ..core.gait.planner import GaitPlanner
-from ..studies.optimize import ArmOptimum, NoAdmissibleGait, optimal_arm_amplitude
+from ..core.gait.arm_optimum import ArmOptimum, NoAdmissibleGait, optimal_arm_amplitude
 from .output import check_json, write_json
 
 JSON_NAME = "optimum.json"

@@ -13,7 +13,7 @@ from ..core.model.params import load_params
 from ..studies import push_study
 from ..studies.executors import open_executor
 from ..studies.figures import save
-from ..studies.optimize import optimal_arm_amplitude
+from ..core.gait.arm_optimum import optimal_arm_amplitude
 from .output import check_json, write_json
 
 
@@ -36,8 +36,8 @@ def run(args: argparse.Namespace) -> int:
         alphas = list(point_values(args, "arm_amplitude"))
     cases = push_study.study_cases(alphas, args.directions)
     with open_executor(args.workers, args.scheduler) as executor:
-        limits = push_study.run_push_study(executor, params, args.step_length, args.period, args.mode, cases,
-                                           args.phase, steering, options)
+        pushed = push_study.PushedGait(params, args.step_length, args.period, args.mode, args.phase, steering, options)
+        limits = push_study.run_push_study(executor, pushed, cases)
     paths = push_study.write_results(limits, args.out)
     title = f"Largest push recovered, L = {args.step_length:g} m, T = {args.period:g} s, phase {args.phase:g} T"
     paths.append(save(push_study.polar_figure(limits, title), args.out / "push-polar.png"))

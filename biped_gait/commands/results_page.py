@@ -8,7 +8,7 @@ import math
 from ..arguments import check_output_file
 from ..studies.executors import open_executor
 from ..studies.results_page import write_results_page
-from ..studies.sweep import inclusive_range
+from ..core.gait.chains import inclusive_range
 
 
 def run(args: argparse.Namespace) -> int:

@@ -58,7 +58,7 @@ class _Channel:
     record: TopicRecord
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SampleRows:
     """Samples of several topics taken together, as rows: sample ``k`` is one message per topic,
     the CDR bytes ``rows[i][k]`` on ``topics[i]``, all at ``stamps[k]`` (ns since the epoch).

@@ -64,7 +64,7 @@ from ..core.model.text import clip
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
-from ..studies.optimize import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
+from ..core.gait.arm_optimum import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, phase_msg, plan_msg, request_key, stride_msgs,
                           urdf_joints)
 from .diagnostics import OK, WARN, Counters, Diagnostics, Report

@@ -24,7 +24,7 @@ from ..core.walking.runner import Walker
 SCRIPT_FORMAT = "STEP PHASE PX PY PZ, groups separated by ';'"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ScriptedPush:
     """A push of the ``pushes`` parameter: in ``step`` (index), at ``phase`` (fraction of T),
     ``impulse`` (N s, world axes)."""

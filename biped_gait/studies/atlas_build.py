@@ -25,6 +25,7 @@ import numpy as np
 from ..core.gait.admissibility import KNEE_TOLERANCE, Limit
 from ..core.gait.atlas import Atlas, Grid, NodeStatus
 from ..core.gait.configurations import GaitMode
+from ..core.gait.bvp import StepProblem
 from ..core.gait.continuation import BRANCH_JUMP, continue_to
 from ..core.gait.gait import Gait
 from ..core.model.params import BipedParams
@@ -77,8 +78,9 @@ def spine(planner: GaitPlanner, mode: GaitMode, grid: Grid, options: Mapping[str
     node = (float(grid.step_lengths[i]), float(grid.periods[j]))
     gaits = []
     for alpha in grid.alphas:
-        guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, mode, seed.problem.closure,
-                            planner.settings, SEED, seed.warm_start(), (*node, float(alpha))) if seed.converged else None
+        guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, planner.settings, SEED,
+                            seed.warm_start(), StepProblem(*node, float(alpha), mode, seed.problem.closure)
+                            ) if seed.converged else None
         gait = planner.plan(GaitRequest(*node, float(alpha), mode, **options), guess) if guess is not None else None
         gaits.append(gait if gait is not None and gait.converged else None)
     return (i, j), gaits
@@ -96,8 +98,8 @@ def _solve_from(planner: GaitPlanner, grid: Grid, k: int, mode: GaitMode, source
     if _stays(result, gait):
         return result
     start = (float(grid.step_lengths[source[0]]), float(grid.periods[source[1]]), alpha)
-    guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, mode, gait.problem.closure,
-                        planner.settings, start, gait.warm_start(), point)
+    guess = continue_to(planner.hybrid, planner.coarse_flow or planner.flow, planner.settings, start,
+                        gait.warm_start(), StepProblem(*point, mode, gait.problem.closure))
     if guess is None:
         return None
     result = planner.plan(request, guess)

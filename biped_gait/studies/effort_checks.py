@@ -19,7 +19,8 @@ from matplotlib.figure import Figure
 from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from .executors import planner_for
-from .optimize import COARSE_STEP, ModeComparison, compare_modes
+from ..core.gait.arm_optimum import COARSE_STEP
+from .mode_comparison import ModeComparison, compare_modes
 
 PAPER_POINTS = ((0.40, 0.45), (0.45, 0.45), (0.50, 0.45))  # (L m, T s)
 # The readings compared: label -> GaitRequest fields.
@@ -32,7 +33,7 @@ READINGS = {
 RATE_BOUNDS = (math.inf, 30.0, 25.0, 20.0, 15.0, 12.0, 10.0, 8.0)  # rad/s
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Readings:
     """Per reading (``READINGS``' labels), the mode comparison at each of ``PAPER_POINTS``."""
 

@@ -25,7 +25,7 @@ from matplotlib.lines import Line2D
 
 from ..core.gait.configurations import GaitMode
 from ..core.model.biped import SWING_TIP, BipedModel
-from .optimize import ArmOptimum
+from ..core.gait.arm_optimum import ArmOptimum
 from ..core.gait.gait import Gait
 
 LINE_STYLES = {GaitMode.NORMAL.value: "-", GaitMode.ANTI_NORMAL.value: "--"}

@@ -21,7 +21,7 @@ from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest
 from ..core.walking.world import WorldView
 from .executors import planner_for
-from .optimize import COARSE_STEP, optimal_arm_amplitude
+from ..core.gait.arm_optimum import COARSE_STEP, optimal_arm_amplitude
 
 # Collins et al. (2009): metabolic cost increase over normal arm swing (%), and the vertical
 # angular momentum's increase without arm swing (%).
@@ -29,7 +29,7 @@ COLLINS_COST = {"arms bound": 7.0, "arms held": 12.0, "anti-phase": 26.0}
 COLLINS_MOMENTUM_WITHOUT_ARMS = 63.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SwingCase:
     """One arm swing: its gait, the peak |H_z| about the CoM (kg m^2/s) over the step, and that
     peak normalized by M V H (dimensionless)."""
@@ -40,7 +40,7 @@ class SwingCase:
     normalized: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class HumanComparison:
     """The three arm swings at (L m, T s): normal at its optimal alpha, none (alpha = 0), and
     anti-normal at the normal optimum."""

@@ -9,7 +9,7 @@ through the margins asked (``Atlas.within``: nodes filtered, not rebuilt): a nod
 admissible if the gait is at some alpha; otherwise it is marked with the condition that limits
 it at the most alphas, or as meeting the limits but not the margins. The boundary T_min(L) is
 found by bisection along T on the human-like branch (at ``BOUNDARY_ALPHA``), the optima by
-``optimize.optimal_arm_amplitude`` on one atlas node in ``stride`` along L and T of the
+``arm_optimum.optimal_arm_amplitude`` on one atlas node in ``stride`` along L and T of the
 admissible region (every other one by default, ``MAP_STRIDE``), both with the options, in
 parallel on an executor.
 L in m, T in s, alpha in rad (figures and text in degrees), W in N m s.
@@ -36,7 +36,8 @@ from ..core.gait.configurations import GaitMode
 from ..core.model.params import BipedParams
 from ..core.gait.planner import GaitRequest, validate_request
 from .executors import planner_for
-from .optimize import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait, compare_modes
+from ..core.gait.arm_optimum import ALPHA_RANGE, COARSE_STEP, NoAdmissibleGait
+from .mode_comparison import compare_modes
 
 BOUNDARY_ALPHA = math.radians(25.0)  # rad: near the optima of the default set
 MAP_STRIDE = 2  # the optima on every other atlas node in L and T
@@ -66,7 +67,7 @@ class Optimum:
         return self.other_W / self.W
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WalkingMaps:
     """The maps of one parameter set and ``mode``: the region per atlas (L, T) node (category
     names), the boundary (L, T_min) pairs, and the optima on the coarser grid; ``margins``

@@ -24,7 +24,7 @@ import math
 import sys
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor, as_completed
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -132,30 +132,41 @@ def largest_push(hybrid: HybridStep, orbit: PlannedOrbit, direction: str, angle:
                      failed.magnitude if failed else math.inf, failed.outcome if failed else "", tuple(trials))
 
 
-def push_task(params: BipedParams, step_length: float, period: float, alpha: float, mode: str, direction: str,
-              phase: float = PHASE, steering: float | None = DEFAULT_RATE,
-              options: Mapping[str, object] | None = None) -> PushLimit:
-    """Worker entry: plan the gait (``options``: further ``GaitRequest`` fields) with this
-    worker's planner, then ``largest_push``."""
-    planner = planner_for(params)
-    gait = planner.plan(GaitRequest(step_length, period, alpha, mode, **(options or {})))
+@dataclass(frozen=True)
+class PushedGait:
+    """What a push study pushes, and how: the gait of the parameter set ``params`` at L (m), T (s)
+    and ``mode`` (each case gives its alpha and direction), with further ``GaitRequest`` fields
+    ``options``; pushed at ``phase`` T of the first step, walked with the momentum steering rate
+    ``steering`` (None: the plain re-aim)."""
+
+    params: BipedParams
+    step_length: float
+    period: float
+    mode: str
+    phase: float = PHASE
+    steering: float | None = DEFAULT_RATE
+    options: Mapping[str, object] = field(default_factory=dict)
+
+
+def push_task(pushed: PushedGait, alpha: float, direction: str) -> PushLimit:
+    """Worker entry: plan the gait of ``pushed`` at ``alpha`` (rad) with this worker's planner,
+    then ``largest_push`` in ``direction`` (a name of ``STUDY_DIRECTIONS``)."""
+    planner = planner_for(pushed.params)
+    step_length, period, mode = pushed.step_length, pushed.period, pushed.mode
+    gait = planner.plan(GaitRequest(step_length, period, alpha, mode, **pushed.options))
     if not gait.admissible:
         raise ValueError(f"the gait L = {step_length:g} m, T = {period:g} s, alpha = {math.degrees(alpha):.2f} deg "
                          f"({mode}) is not admissible: {'; '.join(gait.reasons)}")
-    return largest_push(planner.hybrid, PlannedOrbit.of(gait), direction, STUDY_DIRECTIONS[direction], phase, steering)
+    return largest_push(planner.hybrid, PlannedOrbit.of(gait), direction, STUDY_DIRECTIONS[direction], pushed.phase,
+                        pushed.steering)
 
 
-def run_push_study(executor: Executor, params: BipedParams, step_length: float, period: float, mode: str,
-                   cases: Sequence[tuple[float, str]], phase: float = PHASE,
-                   steering: float | None = DEFAULT_RATE, options: Mapping[str, object] | None = None) -> list[PushLimit]:
-    """``largest_push`` for each (alpha rad, direction name) of ``cases``, all at once on
-    ``executor``, with a progress bar on stderr; in the order of ``cases``; ``options``: further
-    ``GaitRequest`` fields of the gait."""
+def run_push_study(executor: Executor, pushed: PushedGait, cases: Sequence[tuple[float, str]]) -> list[PushLimit]:
+    """``largest_push`` of ``pushed`` for each (alpha rad, direction name) of ``cases``, all at
+    once on ``executor``, with a progress bar on stderr; in the order of ``cases``."""
     from tqdm import tqdm
 
-    futures = {executor.submit(push_task, params, step_length, period, alpha, mode, direction, phase, steering,
-                               options): k
-               for k, (alpha, direction) in enumerate(cases)}
+    futures = {executor.submit(push_task, pushed, alpha, direction): k for k, (alpha, direction) in enumerate(cases)}
     results: list[PushLimit | None] = [None] * len(cases)
     with tqdm(total=len(futures), unit="direction", desc="push study", file=sys.stderr) as bar:
         for future in as_completed(futures):

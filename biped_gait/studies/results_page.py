@@ -26,7 +26,7 @@ from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
 from .human_walking import human_comparison
 from .maps import MAP_STRIDE, WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
-from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum
+from ..core.gait.arm_optimum import ALPHA_RANGE, COARSE_STEP, ArmOptimum
 from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
@@ -65,7 +65,7 @@ def _momenta(gait: Gait) -> dict[str, float]:
     return {"T+ about the new stance foot": gait.double_support.h_t_plus[1], "T- about the old stance foot": gait.double_support.h_t_minus[0]}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Reference:
     """Gaits at the paper's momentum point (L = T = 0.45, alpha = 23.5 deg): both modes with
     the theta closure, the normal gait with the paper-comparison closure (theta = 0, s), and
@@ -364,7 +364,7 @@ def _maps_section(all_maps: Sequence[WalkingMaps], figures: dict[str, str]) -> l
     return lines
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Extensions:
     """The page's sections beyond the paper: the maps per parameter set, the stability of the
     paper's gaits, the reviewer's checks, the walk (closed loops, pushes, commanded speed)."""

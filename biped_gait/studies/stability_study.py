@@ -22,7 +22,7 @@ from ..core.walking.runner import Walker
 from .executors import planner_for
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PointStability:
     """A gait at one (L, T, alpha, mode): its open-loop and closed-loop multipliers."""
 

@@ -15,10 +15,12 @@ from tqdm import tqdm
 
 from ..core.gait.configurations import GaitMode
 from .figures import effort_figure, momentum_figure
-from .optimize import ALPHA_RANGE, COARSE_STEP, ArmOptimum, ModeComparison, compare_modes
+from ..core.gait.arm_optimum import ALPHA_RANGE, COARSE_STEP, ArmOptimum
+from .mode_comparison import ModeComparison, compare_modes
 from ..core.model.params import BipedParams
 from ..core.gait.gait import Gait
-from .sweep import SweepGrid, inclusive_range, run_chain
+from ..core.gait.chains import inclusive_range
+from .sweep import SweepGrid, run_chain
 
 FIG4_STEP_LENGTHS = (0.40, 0.45, 0.50)  # m
 PAPER_PERIOD = 0.45  # s

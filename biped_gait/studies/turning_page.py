@@ -94,7 +94,7 @@ def _effort(radius: float, alpha: float, mode: GaitMode) -> float:
     return figures.W if math.isfinite(figures.W) else 1e6
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Turning:
     """What the section shows: the turning atlases by mode, the strides at ``RADII`` (normal,
     ``ALPHA``), and the optimal strides at ``OPTIMUM_CURVATURES`` by mode."""

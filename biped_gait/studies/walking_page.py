@@ -31,10 +31,10 @@ from ..core.walking.transitions import follower_for
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.runner import Walker
 from .executors import planner_for
-from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushLimit, limit_vs_alpha_figure, polar_figure,
-                         run_push_study)
+from .push_study import (PHASE, RECOVERY_STEPS, RECOVERY_TOLERANCE, PushedGait, PushLimit, limit_vs_alpha_figure,
+                         polar_figure, run_push_study)
 from .study import FIG4_STEP_LENGTHS, FIG5_CASE, Study
-from .sweep import inclusive_range
+from ..core.gait.chains import inclusive_range
 
 ALPHA_STEP = math.radians(5.0)  # rad: the default spacing of the alphas of the closed loops and the pushes
 AXIS_DIRECTIONS = ("forward", "backward", "left", "right")
@@ -70,7 +70,7 @@ class RampStep:
     transition_seconds: float
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Walking:
     """What the section shows: the Fig. 4 gaits (with their multipliers), the closed loops, the
     push limits (steered, and plain at alpha*), alpha* (rad), the ramp and the speed rule."""
@@ -149,9 +149,9 @@ def compute_walking(executor: Executor, study: Study, alpha_step: float = ALPHA_
     ramp = executor.submit(speed_ramp, params, alpha_opt)
     cases = [(a, d) for a in alphas for d in axes]
     cases += [(a, d) for a in (0.0, alpha_opt) for d in diagonals] + [(alpha_opt, d) for d in axes]
-    pushes = run_push_study(executor, params, length, period, GaitMode.NORMAL.value, cases)
-    plain = run_push_study(executor, params, length, period, GaitMode.NORMAL.value, [(alpha_opt, d) for d in axes],
-                           steering=None)
+    pushed = PushedGait(params, length, period, GaitMode.NORMAL.value)
+    pushes = run_push_study(executor, pushed, cases)
+    plain = run_push_study(executor, replace(pushed, steering=None), [(alpha_opt, d) for d in axes])
     steps, rule, note = ramp.result()
     return Walking(list(study.curves), [f.result() for f in loops], pushes, plain, alpha_opt, steps, rule, note)
 

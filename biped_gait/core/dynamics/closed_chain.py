@@ -146,12 +146,46 @@ class ClosedChain:
         old_moment = moment - (tip[0] * force[1] - tip[1] * force[0]) - spin
         return np.array([[*(total - force), old_moment], [*force, spin]])
 
+    def shared_wrenches(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, held: np.ndarray) -> np.ndarray:
+        """``wrenches`` for the new tip's held reaction ``held`` (its ``rows``), with legs of pitch
+        joints only the free lateral force shared between the feet so that the larger of their
+        friction ratios |F_xy| / F_z is least (the motion does not determine it; rigid point feet
+        take any share, and the one that needs the least friction is the one a floor holds first;
+        each ratio is convex in the share while both feet press)."""
+        if not self.lateral_free:
+            return self.wrenches(q, qd, qdd, held)
+        from scipy.optimize import minimize_scalar  # SciPy's optimizers only where a walk holds both feet
+
+        def at(lateral: float) -> np.ndarray:
+            return self.wrenches(q, qd, qdd, self.full_force(held, lateral))
+
+        def ratio(lateral: float) -> float:
+            w = at(lateral)
+            return max(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else np.inf for f in w[:, :3])
+
+        first = at(0.0)
+        if np.any(first[:, 2] <= 0):
+            return first
+        reach = abs(first[0, 1]) + np.abs(first[:, :2]).sum()
+        return at(minimize_scalar(ratio, bounds=(-reach, reach), method="bounded", options={"xatol": 1e-9}).x)
+
     def full_force(self, held: np.ndarray, lateral: float = 0.0) -> np.ndarray:
         """The new tip's reaction with all its components from its held rows (``lateral``: the free
         lateral force, N, with legs of pitch joints only)."""
         if not self.lateral_free:
             return np.asarray(held, dtype=float)
         return np.array([held[0], lateral, held[1]])
+
+    def lateral_drift(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray | None:
+        """With legs of pitch joints only, minus the new tip's sideways velocity (m/s, model axes;
+        None with lateral hips, which hold it): the chain holds the new tip's x and z (its lateral
+        row vanishes at q1 = 0), and rolling over the feet line moves it sideways to second order,
+        a few mm/s by a lift-off. The whole robot translated by this velocity has the new tip at
+        rest and the old one drifting instead."""
+        if not self.lateral_free:
+            return None
+        _, j2 = contact_jacobians(self.bm, self.exchange, q)
+        return np.array([0.0, -float(j2[1] @ self.bm.embed(qd)), 0.0])
 
     def impact(self, q: np.ndarray, qd: np.ndarray) -> HeldImpact:
         """The passive impact at ``q`` from the single-support velocity ``qd`` (rad/s), both tips held

@@ -26,6 +26,8 @@ through this module.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..model.biped import BipedModel
@@ -236,6 +238,27 @@ def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, jo
         rhs[..., rows, :] += joint_impulse[:, None]
     solved = np.linalg.solve(kkt, rhs)[..., :n, :] if xd.ndim > 1 else np.linalg.solve(kkt, rhs)[:n]
     return solved[..., 0] if stacked else solved
+
+
+@dataclass(frozen=True, eq=False)
+class PassiveImpact:
+    """The passive impact at a touchdown configuration (eqs. 8-9): the velocity after it (X
+    coordinates), the reaction impulse at the new stance foot (N s, world axes of the step) and the
+    old stance foot's vertical velocity after it (m/s, >= 0: it leaves the ground)."""
+
+    xd_plus: np.ndarray
+    reaction: np.ndarray
+    old_foot_vz: float
+
+
+def passive_impact(impact: ImpactMap, qd: np.ndarray) -> PassiveImpact:
+    """Eqs. (8)-(9) at ``impact``'s configuration from the single-support velocity ``qd``."""
+    bm = impact.bm
+    xd_b = bm.embed(qd)
+    rows = impact.layout.joints
+    xd_plus = impact_with(impact.mass_matrix, impact.j2, xd_b, np.zeros(impact.layout.na), rows, at_rest=True)
+    reaction = np.linalg.lstsq(impact.j2.T, impact.mass_matrix @ (xd_plus - xd_b), rcond=None)[0]
+    return PassiveImpact(xd_plus, reaction[:3], float(impact.j1[2] @ xd_plus))
 
 
 class HybridStep:

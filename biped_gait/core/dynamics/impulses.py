@@ -160,7 +160,7 @@ def absolute_reading(bm: BipedModel) -> tuple[tuple[float, ...], ...]:
     return tuple(rows)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImpactProblem:
     """The data of one double support: D_e, J1, J2 at q(T), Xd^b, Xd^a, z_d, and the layout."""
 
@@ -237,7 +237,7 @@ class EffortOptions:
         return layout.absolute if self.coordinates == "absolute" else np.eye(layout.na)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImpulseSolution:
     """The chosen solution of eqs. (6)-(10); ``success`` False carries the solver's reason."""
 
@@ -343,20 +343,23 @@ def friction_ratios(solution: ImpulseSolution) -> np.ndarray:
     return out
 
 
+def pyramid(friction: float) -> np.ndarray:
+    """The inscribed octagonal pyramid of the friction cone of coefficient ``friction`` (section
+    4.4): rows G (CONE_SIDES x 3) with G f <= 0 for a force or impulse f = [fx, fy, fz] inside it,
+    cos(a) fx + sin(a) fy <= mu cos(pi/8) fz for eight directions a; none for mu = inf."""
+    if not math.isfinite(friction):
+        return np.zeros((0, 3))
+    angles = 2 * np.pi * np.arange(CONE_SIDES) / CONE_SIDES
+    return np.column_stack([np.cos(angles), np.sin(angles), np.full(CONE_SIDES, -friction * math.cos(math.pi / CONE_SIDES))])
+
+
 def _cone_rows(options: EffortOptions, layout: ImpactLayout) -> np.ndarray:
-    """Rows G x <= 0 of the inscribed octagonal pyramid of the friction cone on each reaction
-    impulse: cos(a) Ix + sin(a) Iy <= mu cos(pi/8) Iz for eight directions a (none for mu = inf)."""
-    if not math.isfinite(options.friction):
-        return np.zeros((0, layout.unknowns))
-    rows = []
-    apothem = options.friction * math.cos(math.pi / CONE_SIDES)
-    for sl in layout.reactions:
-        for k in range(CONE_SIDES):
-            angle = 2 * math.pi * k / CONE_SIDES
-            row = np.zeros(layout.unknowns)
-            row[sl.start: sl.start + 3] = (math.cos(angle), math.sin(angle), -apothem)
-            rows.append(row)
-    return np.array(rows)
+    """Rows G x <= 0 of the pyramid (``pyramid``) on each reaction impulse of the unknowns x."""
+    sides = pyramid(options.friction)
+    rows = np.zeros((len(sides) * len(layout.reactions), layout.unknowns))
+    for k, sl in enumerate(layout.reactions):
+        rows[k * len(sides):(k + 1) * len(sides), sl.start:sl.start + 3] = sides
+    return rows
 
 
 def _unknown_bounds(options: EffortOptions, layout: ImpactLayout) -> tuple[np.ndarray, np.ndarray]:
@@ -386,7 +389,7 @@ def _finish(problem: ImpactProblem, equations: Equations, effort_name: str, opti
     )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Effort:
     """The parts of the effort LP that depend only on the options and the layout: its variables
     are x (the layout's unknowns), then t (one per reading row of I^- and of I^+) bounding the absolute values summed; cost
@@ -425,7 +428,7 @@ def _effort_parts(options: EffortOptions, layout: ImpactLayout) -> _Effort:
                    np.concatenate([upper, np.full(n_t, np.inf)]), abs_rows, cone)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _L1Program:
     """The effort LP in (x, t): minimize ``parts.cost`` (x, t) = sum(t) subject to
     a_ub (x, t) <= b_ub, a_eq (x, t) = b_eq and the parts' bounds. ``a`` and ``b`` hold the

@@ -27,7 +27,7 @@ NewtonResidual = Callable[[np.ndarray, bool], tuple[np.ndarray, "np.ndarray | No
 ChordResidual = Callable[[np.ndarray], tuple[np.ndarray, Any]]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SolveResult:
     """The last accepted iterate ``x``, F(x), the auxiliary value of F at x, the Jacobian last
     used, the number of accepted steps, and the outcome (``status`` and a one-line ``message``)."""

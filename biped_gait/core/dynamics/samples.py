@@ -40,7 +40,7 @@ except ImportError:  # not built (no compiler): the Python loops serve
 
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SampleDynamics:
     """Per sample (row): qdd (rad/s^2); the ground reaction [Fx, Fy, Fz, Mz] at the stance tip (N,
     N m); the swing-tip height (m); the yaw angular momentum about the vertical through the stance
@@ -53,7 +53,7 @@ class SampleDynamics:
     lowest_link: np.ndarray
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SamplePoses:
     """Per sample (row): the pelvis position (m) and orientation (quaternion x, y, z, w; of the
     mirror image M R M, M = diag(1, -1, 1), when asked for mirrored); the pelvis velocity in the

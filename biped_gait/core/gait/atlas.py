@@ -82,7 +82,7 @@ def rebuild_command(params_name: str, source: str | None = None) -> str:
     return f"biped-gait atlas build --params {source or params_name}"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Grid:
     """The atlas's axes: L (m), T (s), alpha (rad), each ascending."""
 
@@ -126,7 +126,7 @@ class Grid:
         return tuple(lower), np.array(fractions)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Atlas:
     """The gaits of one parameter set (``params``, its name; ``friction`` its coefficient) and
     ``mode`` on ``grid``; ``nodes`` maps each name of ``NODE_ARRAYS`` to its array;

@@ -26,7 +26,7 @@ CLOSURES = ("theta", "slack")
 _MESSAGES = {newton.DIVERGED: "the integration diverged (non-finite state)", newton.SINGULAR: "singular shooting Jacobian"}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BvpSolution:
     """Result of the shooting (the gait's ballistic step): always returned, ``converged`` says
     whether to trust it. Angles rad, velocities rad/s, ``closure_gap`` kg m^2/s."""
@@ -46,17 +46,35 @@ class BvpSolution:
     coarse: "BvpSolution | None" = None  # the same step on the coarse grid, when asked for (``solve_bvp``)
 
 
-class ShootingProblem:
-    """The residual F(u) of the shooting problem, u = [qd(0), theta], and its exact Jacobian,
-    for one (L m, T s, alpha rad, mode, step width m or None for the hips' spacing)."""
+@dataclass(frozen=True)
+class StepProblem:
+    """What the shooting of one ballistic step solves: L (m), T (s), alpha (rad), the mode, the
+    closure (``theta``: the trunk pitch theta free and the momentum about the feet line closed;
+    ``slack``: theta = 0), the step width (m between the feet; None: the hips' spacing), and the
+    closure gap the solve makes (``closure_target``, kg m^2/s: 0, the momentum about the feet
+    line conserved; with the feet's spin axes tilted, minus what the ground's spin moments change
+    of it, ``ImpulseSolution.foot_line_moment``)."""
 
-    def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode,
-                 step_width: float | None = None, closure_target: float = 0.0):
-        self.hybrid, self.period = hybrid, period
-        self.closure_target = closure_target  # kg m^2/s: what the closure gap must be (see solve_bvp)
+    step_length: float
+    period: float
+    arm_amplitude: float
+    mode: GaitMode
+    closure: str = "theta"
+    step_width: float | None = None
+    closure_target: float = 0.0
+
+
+class ShootingResidual:
+    """The residual F(u) of the shooting problem ``problem``, u = [qd(0), theta], and its exact
+    Jacobian."""
+
+    def __init__(self, hybrid: HybridStep, problem: StepProblem):
+        self.hybrid, self.period = hybrid, problem.period
+        self.closure_target = problem.closure_target  # kg m^2/s: what the closure gap must be
         self.configurations = boundary_configurations(hybrid.bm)
         self.n = hybrid.bm.nq
-        self.step_length, self.alpha, self.mode, self.step_width = step_length, alpha, mode, step_width
+        self.step_length, self.alpha, self.mode = problem.step_length, problem.arm_amplitude, problem.mode
+        self.step_width = problem.step_width
         self.evaluations = 0
 
     def ends(self, theta: float) -> tuple[np.ndarray, np.ndarray]:
@@ -116,19 +134,14 @@ class ShootingProblem:
 def solve_bvp(
     hybrid: HybridStep,
     flow: BallisticFlow,
-    step_length: float,
-    period: float,
-    arm_amplitude: float,
-    mode: GaitMode,
-    closure: str = "theta",
+    problem: StepProblem,
     guess: tuple[np.ndarray, float] | None = None,
     settings: Settings = DEFAULTS,
     coarse: BallisticFlow | None = None,
-    step_width: float | None = None,
-    closure_target: float = 0.0,
     with_coarse: bool = False,
 ) -> BvpSolution:
-    """Solve the shooting problem on ``flow``'s grid; ``guess`` = (qd(0), theta) warm-starts it.
+    """Solve the shooting of ``problem`` on ``flow``'s grid; ``guess`` = (qd(0), theta)
+    warm-starts it.
 
     Without a guess, Newton starts from the straight-line velocity (q_T - q_0) / T with
     theta = 0 held fixed, which leads to the human-like branch (swing knee flexion q9 >= 0);
@@ -138,20 +151,17 @@ def solve_bvp(
     With a ``coarse`` flow, Newton's iterations run on the coarse grid and the solution is
     finished on ``flow``'s grid by chord steps with the coarse Jacobian, which the two grids
     share to within the coarse grid's error; if that stalls, Newton continues on the fine grid.
-    ``settings.tolerance`` bounds the end-point residual (rad) and the closure gap (kg m^2/s).
-    ``step_width`` (m) places the feet (None: the hips' spacing). ``closure_target``
-    (kg m^2/s): the closure gap the solve makes (0: the momentum about the feet line conserved;
-    with the feet's spin axes tilted, minus what the ground's spin moments change of it,
-    ``ImpulseSolution.foot_line_moment``). ``with_coarse``: the coarse grid's own solution too,
+    ``settings.tolerance`` bounds the end-point residual (rad) and the closure gap's distance to
+    ``problem.closure_target`` (kg m^2/s). ``with_coarse``: the coarse grid's own solution too,
     converged to ``settings.tolerance`` (or to rounding, below ``settings.coarse_tolerance``) by
     chord steps with Newton's last Jacobian (one coarse flow, as a rule), as
     ``BvpSolution.coarse``: what a plan's integration error is estimated against
     (``richardson``); None where that does not converge, or without a ``coarse`` flow.
     """
-    if closure not in CLOSURES:
-        raise ValueError(f"unknown closure {closure!r}: use 'theta' or 'slack'")
-    with_theta = closure == "theta"
-    system = ShootingProblem(hybrid, step_length, period, arm_amplitude, mode, step_width, closure_target)
+    if problem.closure not in CLOSURES:
+        raise ValueError(f"unknown closure {problem.closure!r}: use 'theta' or 'slack'")
+    with_theta = problem.closure == "theta"
+    system = ShootingResidual(hybrid, problem)
     nq = system.n
     n = nq + 1 if with_theta else nq
     tol, max_iter = settings.tolerance, settings.max_iterations
@@ -169,7 +179,7 @@ def solve_bvp(
     iterations = 0
     if guess is None:
         q0, q_t = system.ends(0.0)
-        u = np.concatenate([(q_t - q0) / period, [0.0]])
+        u = np.concatenate([(q_t - q0) / problem.period, [0.0]])
         if with_theta:
             u, result = run_newton(u, False, newton_flow, newton_tol)
             iterations += result.iterations
@@ -218,7 +228,7 @@ def _message(result: newton.SolveResult) -> str:
     return _MESSAGES.get(result.status, result.message)
 
 
-def _solution(system: ShootingProblem, flow: BallisticFlow, u: np.ndarray, with_theta: bool, ok: bool, message: str,
+def _solution(system: ShootingResidual, flow: BallisticFlow, u: np.ndarray, with_theta: bool, ok: bool, message: str,
               iterations: int, res: FlowResult | None = None) -> BvpSolution:
     """Package the outcome; ``res`` is the fine-grid flow at ``u`` if already computed."""
     if res is None or res.nodes is None:

@@ -14,8 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .bvp import solve_bvp
-from .configurations import GaitMode
+from .bvp import StepProblem, solve_bvp
 from ..dynamics.flow import BallisticFlow
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import Settings
@@ -37,18 +36,19 @@ def path_length(start: tuple[float, float, float], target: tuple[float, float, f
     return length if widths is None else math.hypot(length, (widths[1] - widths[0]) / WIDTH_SPACING)
 
 
-def continue_to(hybrid: HybridStep, flow: BallisticFlow, mode: GaitMode, closure: str, settings: Settings,
-                start: tuple[float, float, float], guess: tuple[np.ndarray, float],
-                target: tuple[float, float, float], step_width: float | None = None) -> tuple[np.ndarray, float] | None:
-    """A warm start at ``target`` (L m, T s, alpha rad) reached from the gait ``guess`` =
-    (qd(0), theta) at ``start``; None if the path cannot be followed (a step below
-    ``MIN_STEP`` fails, or the steps exceed their budget). ``flow`` is the grid the steps are
-    solved on (the coarse one). ``step_width`` (m): the target's, reached along the same path
-    from the hips' spacing, where ``guess`` is (None: the hips' spacing throughout)."""
-    start_a, target_a = np.asarray(start, float), np.asarray(target, float)
+def continue_to(hybrid: HybridStep, flow: BallisticFlow, settings: Settings, start: tuple[float, float, float],
+                guess: tuple[np.ndarray, float], target: StepProblem) -> tuple[np.ndarray, float] | None:
+    """A warm start of ``target`` (its L m, T s, alpha rad, mode and closure) reached from the
+    gait ``guess`` = (qd(0), theta) at ``start`` (L m, T s, alpha rad); None if the path cannot be
+    followed (a step below ``MIN_STEP`` fails, or the steps exceed their budget). ``flow`` is the
+    grid the steps are solved on (the coarse one). The target's step width (m) is reached along
+    the same path from the hips' spacing, where ``guess`` is (None: the hips' spacing throughout)."""
+    step_width = target.step_width
+    start_a = np.asarray(start, float)
+    target_a = np.array([target.step_length, target.period, target.arm_amplitude], float)
     spacing = hybrid.bm.params.hip_spacing
     widths = None if step_width is None or step_width == spacing else (spacing, step_width)
-    length = path_length(start, target, widths)
+    length = path_length(start, tuple(target_a), widths)
     if length == 0.0:
         return guess
     coarse = replace(settings, tolerance=max(settings.tolerance, settings.coarse_tolerance),
@@ -65,8 +65,8 @@ def continue_to(hybrid: HybridStep, flow: BallisticFlow, mode: GaitMode, closure
         if not (0.0 < L < 2 * hybrid.bm.params.leg_length and T > 0 and 0 <= alpha < math.pi / 2):
             return None
         width = None if widths is None else spacing + s_next * (step_width - spacing)
-        step = solve_bvp(hybrid, flow, float(L), float(T), float(alpha), mode, closure, (qd, theta), coarse,
-                         step_width=width)
+        on_path = replace(target, step_length=float(L), period=float(T), arm_amplitude=float(alpha), step_width=width)
+        step = solve_bvp(hybrid, flow, on_path, (qd, theta), coarse)
         if step.converged and np.max(np.abs(step.qd_a - qd)) <= BRANCH_JUMP:
             s, qd, theta = s_next, step.qd_a, step.theta
             ds = min(2.0 * ds, MAX_STEP / length)

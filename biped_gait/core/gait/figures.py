@@ -19,7 +19,7 @@ from ..model.biped import BipedModel, cross
 from ..dynamics.samples import SampleEvaluator
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StepTrajectory:
     """Samples of one ballistic step: t (s), q (rad), qd (rad/s), qdd (rad/s^2), each row a time."""
 
@@ -53,7 +53,7 @@ def energy_drift(samples: SampleEvaluator, q: np.ndarray, qd: np.ndarray) -> flo
     return float(np.max(np.abs(e / e[0] - 1)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StepFigures:
     """The figures of a ballistic step; ``samples``, ``grf`` and ``h_vertical`` are its sampled
     curves (None once dropped, as sweeps do to keep results small)."""

@@ -16,7 +16,7 @@ import numpy as np
 
 from .accuracy import IntegrationError
 from .admissibility import Verdict, failure_message
-from .bvp import BvpSolution
+from .bvp import BvpSolution, StepProblem
 from .configurations import GaitMode
 from ..dynamics.impulses import EffortOptions, ImpulseSolution
 from ..model.biped import CoordinateNames
@@ -57,8 +57,14 @@ class GaitProblem:
         """The options of the limits alone: the friction cone at mu, no joint-rate bound."""
         return replace(self.options, rate_bound=math.inf)
 
+    def bvp(self, closure_target: float = 0.0) -> StepProblem:
+        """The shooting problem of its step (``bvp.solve_bvp``), the closure gap made
+        ``closure_target`` (kg m^2/s)."""
+        return StepProblem(self.step_length, self.period, self.arm_amplitude, self.mode, self.closure,
+                           self.step_width, closure_target)
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, eq=False)
 class DoubleSupport:
     """The instantaneous double support of a gait (docs/model.md sections 4 and 6).
 
@@ -94,7 +100,7 @@ class DoubleSupport:
         return abs(self.h_t_plus[1] - self.h_t_minus[1])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Gait:
     """A solved gait of a model whose vectors are ``names``: ``step`` always; ``double_support``
     and ``figures`` when the BVP converged; the ``verdict``; the solve's wall time (s); how it was ``found`` (``guess``: from
@@ -162,7 +168,7 @@ class Gait:
 
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Stride:
     """A gait on a circle of radius ``radius`` (m, signed: positive turns left): a stride of two
     steps, A on the right foot and B on the left (each a ``Gait`` in its own model coordinates,

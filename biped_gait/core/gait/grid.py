@@ -10,7 +10,7 @@ from .monodromy import BackgroundVariationalFlow
 
 
 @dataclass(frozen=True, eq=False)
-class Grid:
+class PlanGrids:
     """A plan's grids: its own (``flow``, ``steps`` RK8 steps per T); the coarse one Newton's
     iterations run on (``coarse``; None: on the plan's own); the one its integration error is
     estimated against (``estimate``: the coarse one, else half as many steps); and the
@@ -22,7 +22,7 @@ class Grid:
     background: BackgroundVariationalFlow
 
     @classmethod
-    def of(cls, hybrid: HybridStep, steps: int, coarse_steps: int) -> "Grid":
+    def of(cls, hybrid: HybridStep, steps: int, coarse_steps: int) -> "PlanGrids":
         """The grids of ``steps`` per T (at least 2) with Newton on ``coarse_steps`` (if fewer)."""
         if steps < 2:
             raise ValueError(f"a plan's grid needs at least 2 steps (its error is estimated on half as many), got {steps}")

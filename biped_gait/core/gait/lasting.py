@@ -26,8 +26,11 @@ rest there onto the gait (a double support, then I^+).
 
 The phase is transcribed by Hermite-Simpson collocation (compressed form) in inverse-dynamics
 form: q, qd, qdd, Gamma and the new tip's reaction at every node and midpoint, the equations of
-motion as equality constraints at each, the new tip's held position and velocity at the nodes;
-the old tip's reaction is the double-support model's root rows. The impulses' equations are linear
+motion and the new tip's held acceleration as equality constraints at each (so that the forces are
+those of the closed chain under the torques, which a walk tracking the plan feeds forward); where
+the phase ends at a given posture (the stop, the start) also the tip's position and velocity at the
+nodes, the defects corrected along the held rows (Posa, Kuindersma and Tedrake 2016); the old
+tip's reaction is the double-support model's root rows. The impulses' equations are linear
 at q_T (I^+'s, at the lift-off posture, are not). The whole is one nonlinear program solved by
 IPOPT (CasADi's, with MUMPS) with exact first derivatives from ``core/dynamics/symbolic.py`` and
 the flow's sensitivities. The effort minimized is
@@ -51,7 +54,7 @@ import numpy as np
 
 from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.flow import BallisticFlow
-from ..dynamics.impulses import CONE_SIDES
+from ..dynamics.impulses import pyramid
 from ..dynamics.symbolic import SymbolicModel
 from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
 from .flow_function import CoupledConstraints, FlowFunction
@@ -67,8 +70,16 @@ TORQUE = 100.0  # N m
 JOINT_IMPULSE = 10.0  # N m s
 ACCELERATION = 10.0  # rad/s^2
 IMPULSE_TIME = 0.1  # s: a reaction impulse's scale is the weight over this long
+CORRECTION = 1e-6  # m, m/s: the collocation defects' corrections along the held rows (the rule's error)
 NEGLIGIBLE = 1e-7  # of a reaction's scale: below it a reaction is the solver's tolerance, not a force
 KINDS = ("periodic", "stop", "start", "limit")
+# The margins a walked plan keeps (``LastingRequest.walkable``). Without them the least-effort plan
+# rides its constraints (a foot's normal force down to 0, the friction used 0.49 of 0.5, the old foot
+# leaving passively) and a walk that tracks it loses a foot, or its lift-off, at its first errors
+# (docs/model.md 14.1). At the default gait and d = 0.1 s they cost E = 63.27 against 62.50 N m s.
+WALK_LEAST_NORMAL_FORCE = 50.0  # N: about a tenth of the weight, on each foot throughout
+WALK_FRICTION_MARGIN = 0.1  # the reactions and impulses within mu - 0.1
+WALK_PUSH_OFF = 2.0  # N s: the old foot's least vertical impulse at I^+ (the weight over 4 ms)
 # IPOPT started at a nearby solution with its multipliers: the barrier parameter from near its end,
 # the point pushed off its bounds by as little as the multipliers are.
 WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipopt.warm_start_bound_push": 1e-9,
@@ -77,17 +88,36 @@ WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipop
 
 @dataclass(frozen=True)
 class LastingRequest:
-    """What the double support is asked: its duration (s) and the effort to minimize (``l1`` or
-    ``l2``)."""
+    """What the double support is asked: its duration (s), the effort to minimize (``l1`` or
+    ``l2``), and the margins a walk tracking it needs (none by default): the least normal force
+    each foot keeps over the phase (``least_normal_force``, N), how far within the floor's
+    friction coefficient its reactions and impulses stay (``friction_margin``), and the least
+    vertical impulse with which the old foot pushes off at I^+ (``push_off``, N s; 0: none, it
+    leaves passively as the paper's; the periodic cycle only)."""
 
     duration: float
     effort: str = "l1"
+    least_normal_force: float = 0.0
+    friction_margin: float = 0.0
+    push_off: float = 0.0
+
+    @classmethod
+    def walkable(cls, duration: float, effort: str = "l1") -> "LastingRequest":
+        """The double support of ``duration`` s with the margins a walk tracking it needs
+        (``WALK_LEAST_NORMAL_FORCE``, ``WALK_FRICTION_MARGIN``, ``WALK_PUSH_OFF``)."""
+        return cls(duration, effort, WALK_LEAST_NORMAL_FORCE, WALK_FRICTION_MARGIN, WALK_PUSH_OFF)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.duration) and self.duration >= 0.0):
             raise ValueError(f"double_support must be a duration >= 0 s, got {self.duration!r}")
         if self.effort not in ("l1", "l2"):
             raise ValueError(f"effort must be l1 or l2, got {self.effort!r}")
+        if not (math.isfinite(self.least_normal_force) and self.least_normal_force >= 0.0):
+            raise ValueError(f"the least normal force must be >= 0 N, got {self.least_normal_force!r}")
+        if not (math.isfinite(self.friction_margin) and self.friction_margin >= 0.0):
+            raise ValueError(f"the friction margin must be >= 0, got {self.friction_margin!r}")
+        if not (math.isfinite(self.push_off) and self.push_off >= 0.0):
+            raise ValueError(f"the push-off must be >= 0 N s, got {self.push_off!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -132,6 +162,7 @@ class LastingSupport:
     iterations: int
     solve_time_s: float
     next_start_velocity: np.ndarray | None = None  # periodic: the next step's qd(0) (its own coordinates, rad/s)
+    push_off: np.ndarray | None = None  # periodic: the old tip's reaction impulse at I^+ (N s, world axes of the step's model)
     solution: dict | None = None  # the program's unknowns and multipliers, to warm-start a nearby solve
 
     @property
@@ -188,9 +219,13 @@ class _Program:
 
     def le(self, expr, what: str, upper: float = 0.0) -> None:
         """expr <= upper."""
+        self.within(expr, what, upper, -np.inf)
+
+    def within(self, expr, what: str, upper: float, lower: float | None = None) -> None:
+        """lower <= expr <= upper (lower None: -upper)."""
         self.rows += [what] * expr.shape[0]
         self.g.append(expr)
-        self.lbg.append(np.full(expr.shape[0], -np.inf))
+        self.lbg.append(np.full(expr.shape[0], -upper if lower is None else lower))
         self.ubg.append(np.full(expr.shape[0], upper))
 
 
@@ -240,29 +275,34 @@ class LastingProgram:
         self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs),
                                                ca.jacobian(self.sym.frame_position(xs, STANCE_TIP), xs)])
         self.f_rnea = ca.Function("rnea", [xs, vs, a_s], [self.sym.rnea(xs, vs, a_s)])
+        # The new tip's acceleration J a + (d(J v)/dX) v: held at every collocation point.
+        self.f_tip_acceleration = ca.Function("tip_acceleration", [xs, vs, a_s], [
+            ca.jtimes(tip, xs, a_s) + ca.jtimes(ca.jtimes(tip, xs, vs), xs, vs)])
         self.f_mass = ca.Function("mass", [xs], [ca.jacobian(self.sym.rnea(xs, ca.SX.zeros(nx), a_s), a_s)])
 
         # Parameters: the gait's touchdown q_T, Xd^b and Xd^a there, the posture at rest, d.
         p_q, p_rest = ca.SX.sym("q_t", nq), ca.SX.sym("q_rest", nq)
         p_xb, p_xa = ca.SX.sym("xd_b", nx), ca.SX.sym("xd_a", nx)
         p_d = ca.SX.sym("d")
+        # The margins: the least normal force at each tip over the phase (N), the friction
+        # coefficient the reactions and impulses keep within.
+        p_least, p_mu = ca.SX.sym("least_normal_force"), ca.SX.sym("friction")
         tip_t, j2_t, j1_t = self.f_tip(self._embed(p_q))
         d_t = self.f_mass(self._embed(p_q))
         b = np.zeros((nx, na))
         b[np.asarray(at)[self.actuated], np.arange(na)] = 1.0
         b = ca.DM(b)
         nlp = _Program()
-        mu = self.friction
-        angles = np.arange(CONE_SIDES) * 2 * np.pi / CONE_SIDES  # the impulses' inscribed pyramid (section 4.4)
-        pyramid = None
-        if math.isfinite(mu):
-            pyramid = ca.DM(np.column_stack([np.cos(angles), np.sin(angles),
-                                             np.full(CONE_SIDES, -mu * np.cos(np.pi / CONE_SIDES))]))
+        # The impulses' inscribed pyramid (section 4.4), its coefficient the parameter's.
+        sides = None
+        if math.isfinite(self.friction):
+            unit = pyramid(1.0)
+            sides = ca.horzcat(ca.DM(unit[:, :2]), p_mu * ca.DM(unit[:, 2]))
 
-        def press(force, what):  # a reaction that presses, within the floor's pyramid
-            nlp.le(-force[2], f"{what} presses")
-            if pyramid is not None:
-                nlp.le(ca.mtimes(pyramid, force[:3]), f"{what} within the friction pyramid")
+        def press(force, what, least=0.0):  # a reaction that presses (by ``least``), within the floor's pyramid
+            nlp.le(least - force[2], f"{what} presses")
+            if sides is not None:
+                nlp.le(ca.mtimes(sides, force[:3]), f"{what} within the friction pyramid")
 
         def cost(values, weight, scale):
             if self.effort == "l1":
@@ -307,10 +347,11 @@ class LastingProgram:
             effort_limit = self.effort_limits
             self._held(nlp, p_q, xh[at], nlp.var("a", nq, scale=ACCELERATION),
                        nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight),
-                       b, press)
+                       b, press, p_least)
         if n_int > 0:
             points = self._phase(nlp, p_d, p_q if arrives else p_rest, xh[at] if arrives else None,
-                                 None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost)
+                                 None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost,
+                                 p_least)
             outputs.update({key: ca.horzcat(*[pt[i] for pt in points]).T
                             for i, key in enumerate(("q", "v", "a", "tau", "f_old", "f_new"))})
             x_end = self._embed(points[-1][1])
@@ -318,14 +359,20 @@ class LastingProgram:
             # I^+: the new tip held, onto Xd^a (eq. 10), at the lift-off posture.
             ip, r2p = nlp.var("i_plus", na, scale=JOINT_IMPULSE), nlp.var("r2_plus", 3, scale=self.impulse_scale)
             d_l, j2_l, xd_a = d_t, j2_t, p_xa
+            push = ca.DM.zeros(nx)
             if periodic:
                 q_l = points[-1][0]
-                _, j2_l, _ = self.f_tip(self._embed(q_l))
+                _, j2_l, j1_l = self.f_tip(self._embed(q_l))
                 d_l = self.f_mass(self._embed(q_l))
                 qd = ca.mtimes(ca.DM(self.exchange.inverse), qd_next)
                 xd_a = ca.vertcat(-ca.mtimes(j2_l[:, 3:], qd), qd)  # LinearExchange.next_velocity
                 nlp.le(-xd_a[2], "the old tip leaves the ground")
-            nlp.eq(ca.mtimes(d_l, xd_a - x_end) - ca.mtimes(b, ip) - ca.mtimes(j2_l.T, r2p), "I^+ (eq. 10)")
+                # The old tip's push-off, if the request asks for one (its bounds, ``solve``).
+                r1p = nlp.var("r1_plus", 3, scale=self.impulse_scale)
+                press(r1p, "the old tip's push-off")
+                push = ca.mtimes(j1_l.T, r1p)
+                outputs["push_off"] = r1p
+            nlp.eq(ca.mtimes(d_l, xd_a - x_end) - ca.mtimes(b, ip) - ca.mtimes(j2_l.T, r2p) - push, "I^+ (eq. 10)")
             press(r2p, "the new tip's reaction to I^+")
             cost(ip, 1.0, JOINT_IMPULSE)
             outputs["i_plus"] = ip
@@ -334,7 +381,7 @@ class LastingProgram:
         self.lbg, self.ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
         self.row_names = nlp.rows
         self.scale = np.concatenate(nlp.scales)
-        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d)
+        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d, p_least, p_mu)
         w = ca.vertcat(*nlp.w)
         problem = {"x": w, "f": sum(nlp.cost), "g": ca.vertcat(*nlp.g), "p": params}
         self.where = nlp.where
@@ -373,11 +420,13 @@ class LastingProgram:
         cost = ca.Function("cost", [problem["x"], problem["p"]], [problem["f"]])
         return {"x": w, "f": cost(w, p), "g": self.constraints(w, p), "p": p}
 
-    def _phase(self, nlp: "_Program", p_d, q_first, v_first, q_last, rest_last: bool, tip_t, b, press, cost) -> list:
+    def _phase(self, nlp: "_Program", p_d, q_first, v_first, q_last, rest_last: bool, tip_t, b, press, cost,
+               least) -> list:
         """The collocation points (q, qd, qdd, Gamma, old and new tip's reactions) over [0, d], nodes
         and midpoints in time order; the first node at ``q_first`` with velocity ``v_first`` (None: at
-        rest), the last at ``q_last`` (at rest when ``rest_last``)."""
-        nq, na, n_int, rows = self.nq, self.na, self.intervals, self.rows
+        rest), the last at ``q_last`` (at rest when ``rest_last``); every reaction pressing by
+        ``least`` (N)."""
+        nq, na, n_int, rows, at = self.nq, self.na, self.intervals, self.rows, self.at.tolist()
         effort_limit = self.effort_limits
         lower_q, upper_q = self._ranges()
         h = p_d / n_int
@@ -392,14 +441,23 @@ class LastingProgram:
                 if v_first is None:
                     nlp.eq(a, "at rest")
             else:
-                tip_k, j2_k, _ = self.f_tip(self._embed(q))
-                nlp.eq(tip_k[rows] - tip_t[rows], "the new tip held")
-                nlp.eq(ca.mtimes(j2_k[rows, :], self._embed(v)), "the new tip at rest")
                 q0, v0, a0 = previous
                 a_m = nlp.var("a_mid", nq, scale=ACCELERATION)
                 v_m = (v0 + v) / 2 + h / 8 * (a0 - a)
-                nlp.eq(q - q0 - h / 6 * (v0 + 4 * v_m + v), "collocation")
-                nlp.eq(v - v0 - h / 6 * (a0 + 4 * a_m + a), "collocation")
+                q_defect = q - q0 - h / 6 * (v0 + 4 * v_m + v)
+                v_defect = v - v0 - h / 6 * (a0 + 4 * a_m + a)
+                if q_last is not None:
+                    # A phase that ends at a given posture: the tip also held at the nodes in
+                    # position and velocity, the defects corrected along the held rows (Posa,
+                    # Kuindersma and Tedrake 2016) by what the rule's error alone makes non-zero.
+                    tip_k, j2_k, _ = self.f_tip(self._embed(q))
+                    nlp.eq(tip_k[rows] - tip_t[rows], "the new tip held")
+                    nlp.eq(ca.mtimes(j2_k[rows, :], self._embed(v)), "the new tip at rest")
+                    held_rows = j2_k[rows, at].T
+                    q_defect -= ca.mtimes(held_rows, nlp.var("gamma_q", len(rows), scale=CORRECTION))
+                    v_defect -= ca.mtimes(held_rows, nlp.var("gamma_v", len(rows), scale=CORRECTION))
+                nlp.eq(q_defect, "collocation")
+                nlp.eq(v_defect, "collocation")
                 tau_m = nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE)
                 points.append([(q0 + q) / 2 + h / 8 * (v0 - v), v_m, a_m, tau_m,
                                nlp.var("f_new_mid", 3, scale=self.weight), 4.0])
@@ -411,23 +469,30 @@ class LastingProgram:
             nlp.eq(previous[1], "at rest")
             nlp.eq(previous[2], "at rest")
         out = []
-        for q, v, a, tau, f2, weight in points:
-            out.append((q, v, a, tau, self._held(nlp, q, v, a, tau, f2, b, press), f2))
+        resting = {0} if v_first is None else set()  # where the acceleration is set to zero (at rest)
+        if rest_last:
+            resting.add(len(points) - 1)
+        for k, (q, v, a, tau, f2, weight) in enumerate(points):
+            out.append((q, v, a, tau, self._held(nlp, q, v, a, tau, f2, b, press, least, k not in resting), f2))
             cost(tau, h / 6 * weight, TORQUE)
         return out
 
-    def _held(self, nlp: "_Program", q, v, a, tau, f2, b, press):
-        """The closed chain's equations of motion at one instant, both reactions pressing within the
-        floor's pyramid; the old tip's reaction (the root rows less the new tip's share)."""
+    def _held(self, nlp: "_Program", q, v, a, tau, f2, b, press, least=0.0, accelerating: bool = True):
+        """The closed chain's equations of motion at one instant, the new tip's acceleration held
+        (unless ``accelerating`` is False: the acceleration is set to zero there), both reactions
+        pressing (by ``least``, N) within the floor's pyramid; the old tip's reaction (the root rows
+        less the new tip's share)."""
         at, roots, rows = self.at.tolist(), self.roots.tolist(), self.rows
         x = self._embed(q)
         _, j2_k, _ = self.f_tip(x)
         generalized = self.f_rnea(x, self._embed(v), self._embed(a))
         nlp.eq(generalized[at] - ca.mtimes(j2_k[rows, at].T, f2[rows]) - ca.mtimes(b[at, :], tau),
                "the closed chain's equations of motion")
+        if accelerating:
+            nlp.eq(self.f_tip_acceleration(x, self._embed(v), self._embed(a))[rows], "the new tip held (its acceleration)")
         f1 = generalized[roots] - f2
-        press(f1, "the old tip's reaction")
-        press(f2, "the new tip's reaction")
+        press(f1, "the old tip's reaction", least)
+        press(f2, "the new tip's reaction", least)
         return f1
 
     @cached_property
@@ -497,15 +562,26 @@ class LastingProgram:
             offset += size
         return w0 / self.scale
 
-    def solve(self, boundary: Boundary, duration: float, start: dict | None = None,
+    def solve(self, boundary: Boundary, request: LastingRequest, start: dict | None = None,
               impulsive: dict[str, np.ndarray] | None = None) -> LastingSupport:
-        """The double support of ``duration`` s between the gait's ends; ``start`` a nearby
-        solution's unknowns and multipliers (``LastingSupport.solution``), else ``initial_guess``
-        (with ``impulsive``)."""
+        """The double support ``request`` asks (its duration and margins; the program's effort)
+        between the gait's ends; ``start`` a nearby solution's unknowns and multipliers
+        (``LastingSupport.solution``), else ``initial_guess`` (with ``impulsive``)."""
         if self.kind == "periodic":
             self.flow_function.evaluation.period = boundary.period
-        params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a, [duration]])
+        duration = request.duration
+        friction = max(self.friction - request.friction_margin, 0.0) if math.isfinite(self.friction) else 0.0
+        params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a,
+                                 [duration, request.least_normal_force, friction]])
         args = dict(p=params, lbx=self.lbw, ubx=self.ubw, lbg=self.lbg, ubg=self.ubg)
+        if "r1_plus" in self.where:  # the push-off: none (zero), or at least the request's upwards
+            at = self.where["r1_plus"]
+            lower, upper = self.lbw.copy(), self.ubw.copy()
+            lower[at:at + 3], upper[at:at + 3] = (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+            if request.push_off > 0.0:
+                lower[at:at + 3] = (-np.inf, -np.inf, request.push_off / self.scale[at + 2])
+                upper[at:at + 3] = np.inf
+            args.update(lbx=lower, ubx=upper)
         solver = self.solver
         if start is None:
             args["x0"] = self.initial_guess(boundary, impulsive)
@@ -544,8 +620,9 @@ class LastingProgram:
         message = "solved" if success else (f"no {self.kind} double support of {duration:g} s: IPOPT "
                                             f"{stats['return_status']}; {self._worst(solution)}")
         next_start = out["qd_next"].ravel() if "qd_next" in out else None
+        push_off = out["push_off"].ravel() if "push_off" in out else None
         return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held, l1, l2,
-                              total, int(stats["iter_count"]), elapsed, next_start, solution)
+                              total, int(stats["iter_count"]), elapsed, next_start, push_off, solution)
 
     def _worst(self, solution: dict) -> str:
         """What the last iterate violates most, in the constraints' words and units."""
@@ -585,7 +662,7 @@ class LastingPlanner:
 
     def limit(self, gait, effort: str = "l1") -> LastingSupport:
         """The limit d -> 0+: I^-, the held impact pressing, I^+ (its effort is E(0+))."""
-        return self.program("limit", effort).solve(self.boundary(gait), 0.0)
+        return self.program("limit", effort).solve(self.boundary(gait), LastingRequest(0.0, effort))
 
     def periodic(self, gait, request: LastingRequest, start: dict | None = None,
                  limit: LastingSupport | None = None) -> LastingSupport:
@@ -599,16 +676,16 @@ class LastingPlanner:
         if start is None:
             limit = limit or self.limit(gait, request.effort)
             seed = self.program("limit", request.effort).values(limit.solution)
-            return program.solve(boundary, request.duration, None, seed)
-        return program.solve(boundary, request.duration, start)
+            return program.solve(boundary, request, None, seed)
+        return program.solve(boundary, request, start)
 
     def stop(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
         """From ``gait``'s touchdown to rest in the standing posture ``rest`` (rad, on the same two
         feet: ``core/walking/balance.standing_pose`` at the gait's step length and width): I^-, the
         held impact, a double support of ``request.duration`` s ending at rest (docs/model.md 14)."""
-        return self.program("stop", request.effort).solve(self.boundary(gait, rest), request.duration)
+        return self.program("stop", request.effort).solve(self.boundary(gait, rest), request)
 
     def start(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
         """From rest in the standing posture ``rest`` onto ``gait``: a double support of
         ``request.duration`` s from rest to the gait's touchdown posture, then I^+ onto its next step."""
-        return self.program("start", request.effort).solve(self.boundary(gait, rest), request.duration)
+        return self.program("start", request.effort).solve(self.boundary(gait, rest), request)

@@ -25,7 +25,7 @@ import numpy as np
 
 from .admissibility import judge
 from .atlas import Atlas, AtlasError, atlas_path, period_runs
-from .bvp import CLOSURES, BvpSolution, solve_bvp
+from .bvp import CLOSURES, BvpSolution, StepProblem, solve_bvp
 from .configurations import GaitMode
 from .continuation import BRANCH_JUMP, STEP_ITERATIONS, continue_to
 from ..dynamics.flow import BallisticFlow, FlowResult, hermite_samples
@@ -35,7 +35,7 @@ from ..dynamics.impulses import EFFORTS, EffortOptions, ImpulseSolution, frictio
 from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params, names_set
 from .figures import StepFigures, energy_drift, step_figures
-from .grid import Grid
+from .grid import PlanGrids
 from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import SpeculativeFlow
@@ -225,9 +225,9 @@ class GaitPlanner:
         self._note = on_note or (lambda text: warnings.warn(text, stacklevel=4))
         self.model = BipedModel.from_params(self.params)
         self.hybrid = HybridStep(self.model)
-        self.grid = Grid.of(self.hybrid, settings.fine_steps, settings.coarse_steps)
+        self.grid = PlanGrids.of(self.hybrid, settings.fine_steps, settings.coarse_steps)
         self.flow, self.coarse_flow = self.grid.flow, self.grid.coarse
-        self._refined: dict[int, Grid] = {}  # the finer grids plans were refined to, by steps
+        self._refined: dict[int, PlanGrids] = {}  # the finer grids plans were refined to, by steps
         for mode in GaitMode if modes is None else map(GaitMode.parse, modes):
             self._atlases[mode] = self._load_atlas(mode)
 
@@ -371,18 +371,20 @@ class GaitPlanner:
         return self._refining(lambda grid, start, coarser: self._stride_on(grid, problem, start, found, stability,
                                                                           coarser), guess)
 
-    def _stride_on(self, grid: Grid, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
+    def _stride_on(self, grid: PlanGrids, problem: GaitProblem, guess: StrideGuess, found: str, stability: bool,
                    coarser: Stride | None = None, estimate: bool = True) -> Stride:
         """The stride of ``problem`` solved from ``guess`` on ``grid``, its closures matched
         to what the spin moments do (legs leaning), with its steps' integration errors if
         ``estimate`` (against ``coarser``, the stride on the estimate's grid, if solved already;
         else solved again there from this one) and its multipliers if ``stability``."""
-        from .stride import solve_stride  # strides only: a straight plan does without
+        from .stride import StrideProblem, solve_stride  # strides only: a straight plan does without
+
+        stride = StrideProblem(problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
+                               problem.turn_radius)
 
         def solve(on: BallisticFlow, coarse: BallisticFlow | None, start: StrideGuess, targets: tuple[float, float],
                   settings: Settings = self.settings):
-            return solve_stride(self.hybrid, on, problem.step_length, problem.period, problem.arm_amplitude,
-                                problem.mode, problem.turn_radius, start, settings, coarse, targets)
+            return solve_stride(self.hybrid, on, stride, start, settings, coarse, targets)
 
         targets = np.zeros(2)
         closure = _ClosureRounds()
@@ -455,7 +457,7 @@ class GaitPlanner:
         warm-started from the last, halved where it fails or jumps (``continuation.BRANCH_JUMP``);
         the curvatures (1/m) reached and their strides, the last nearest the request's (the
         start's first: the straight gait's at a vanishing curvature, if no step succeeds)."""
-        from .stride import solve_stride
+        from .stride import StrideProblem, solve_stride
 
         target = 1.0 / problem.turn_radius
         if start is None:
@@ -473,8 +475,9 @@ class GaitPlanner:
             trial = curvature + step * span
             if (trial - target) * span > 0:
                 trial = target
-            solution = solve_stride(self.hybrid, flow, problem.step_length, problem.period, problem.arm_amplitude,
-                                    problem.mode, 1.0 / trial, guess, coarse)
+            on_path = StrideProblem(problem.step_length, problem.period, problem.arm_amplitude, problem.mode,
+                                    1.0 / trial)
+            solution = solve_stride(self.hybrid, flow, on_path, guess, coarse)
             a, b = solution.steps
             if solution.converged and max(np.max(np.abs(a.qd_a - guess[0])), np.max(np.abs(b.qd_a - guess[2]))) <= BRANCH_JUMP:
                 curvature, guess = trial, (a.qd_a, a.theta, b.qd_a, b.theta)
@@ -501,8 +504,8 @@ class GaitPlanner:
                 return self._hinted(first, atlas, problem)
         origin = self._origin(problem, atlas)
         if origin is not None:
-            guess = continue_to(self.hybrid, self.coarse_flow or self.flow, problem.mode, problem.closure, self.settings,
-                                origin[0], origin[1], point, problem.step_width)
+            guess = continue_to(self.hybrid, self.coarse_flow or self.flow, self.settings, origin[0], origin[1],
+                                problem.bvp())
             if guess is not None:
                 gait = self._solve(problem, guess, "continuation")
                 if gait.converged and (gait.admissible or first is None):
@@ -519,7 +522,8 @@ class GaitPlanner:
         index = atlas.nearest(point) if atlas is not None else None
         if index is not None:
             return atlas.grid.point(index), (atlas.nodes["qd_a"][index], float(atlas.nodes["theta"][index]))
-        step = solve_bvp(self.hybrid, self.flow, *SEED, problem.mode, problem.closure, None, self.settings, self.coarse_flow)
+        step = solve_bvp(self.hybrid, self.flow, StepProblem(*SEED, problem.mode, problem.closure), None, self.settings,
+                         self.coarse_flow)
         return (SEED, (step.qd_a, step.theta)) if step.converged else None
 
     def _hinted(self, gait: Gait, atlas: Atlas | None, problem: GaitProblem) -> Gait:
@@ -577,16 +581,16 @@ class GaitPlanner:
         return self._refining(lambda grid, start, coarser: self._solve_on(grid, problem, start, found, coarser), guess,
                               self._grid(steps))
 
-    def _grid(self, steps: int) -> Grid:
+    def _grid(self, steps: int) -> PlanGrids:
         """The planner's grid, or one of ``steps`` per T if that is finer (Newton's iterations on
         half as many)."""
         if steps <= self.grid.steps:
             return self.grid
         if steps not in self._refined:
-            self._refined[steps] = Grid.of(self.hybrid, steps, steps // 2)
+            self._refined[steps] = PlanGrids.of(self.hybrid, steps, steps // 2)
         return self._refined[steps]
 
-    def _refining(self, solve: Callable[[Grid, Any, Any], Gait | Stride], guess: Any, grid: Grid | None = None
+    def _refining(self, solve: Callable[[PlanGrids, Any, Any], Gait | Stride], guess: Any, grid: PlanGrids | None = None
                   ) -> Gait | Stride:
         """``solve(grid, guess, None)`` on ``grid`` (default: the planner's), and again on grids of
         twice as many steps (up to ``REFINEMENTS`` doublings of the planner's grid, each from the
@@ -605,14 +609,12 @@ class GaitPlanner:
             result = refined
         return result
 
-    def _solve_on(self, grid: Grid, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
+    def _solve_on(self, grid: PlanGrids, problem: GaitProblem, guess: tuple[np.ndarray, float] | None,
                   found: str, coarser: Gait | None = None) -> Gait:
         """The gait of ``problem`` solved from ``guess`` on ``grid``, with its integration error
         (against ``coarser``, the gait on the estimate's grid, if solved already)."""
         shooting = SpeculativeFlow(grid.flow, grid.background)
-        step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                         problem.mode, problem.closure, guess, self.settings, grid.coarse, problem.step_width,
-                         with_coarse=True)
+        step = solve_bvp(self.hybrid, shooting, problem.bvp(), guess, self.settings, grid.coarse, with_coarse=True)
         flow = self._variational_flow(problem, step, shooting)
         gait = self.step_gait(problem, step, found)
         for _ in range(CLOSURE_ROUNDS):  # legs leaning: the closure matched to what the spin moments do
@@ -622,9 +624,8 @@ class GaitPlanner:
                     abs(step.closure_gap + ds.foot_line_moment) <= self.settings.tolerance:
                 break  # nothing to match: the spin moments change nothing (or the closure already matches)
             shooting = SpeculativeFlow(grid.flow, grid.background)
-            step = solve_bvp(self.hybrid, shooting, problem.step_length, problem.period, problem.arm_amplitude,
-                             problem.mode, problem.closure, (step.qd_a, step.theta), self.settings, grid.coarse,
-                             problem.step_width, closure_target=-ds.foot_line_moment, with_coarse=True)
+            step = solve_bvp(self.hybrid, shooting, problem.bvp(-ds.foot_line_moment), (step.qd_a, step.theta),
+                             self.settings, grid.coarse, with_coarse=True)
             flow = self._variational_flow(problem, step, shooting)
             gait = self.step_gait(problem, step, found)
         else:
@@ -635,7 +636,7 @@ class GaitPlanner:
             gait = replace(gait, stability=self._multipliers(grid, problem, step, gait.double_support.impulses, flow))
         return gait
 
-    def _integration_error(self, grid: Grid, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
+    def _integration_error(self, grid: PlanGrids, problem: GaitProblem, gait: Gait, coarser: Gait | None) -> Gait:
         """``gait``, solved on ``grid``, with its integration error: against ``coarser``, the gait
         on the estimate's grid, or (None) its step's solution on that grid (the shooting's coarse
         one, else its step solved again there from its own solution, with the same closure),
@@ -643,9 +644,8 @@ class GaitPlanner:
         def again() -> tuple[Gait]:
             step, near = gait.step, gait.double_support and gait.double_support.impulses
             if step.coarse is None:  # a grid without a coarse flow (its estimate's is then half of it)
-                step = solve_bvp(self.hybrid, grid.estimate, problem.step_length, problem.period, problem.arm_amplitude,
-                                 problem.mode, problem.closure, (step.qd_a, step.theta), self._estimate_settings, None,
-                                 problem.step_width, closure_target=step.closure_gap)
+                step = solve_bvp(self.hybrid, grid.estimate, problem.bvp(step.closure_gap), (step.qd_a, step.theta),
+                                 self._estimate_settings, None)
             else:
                 step = step.coarse
             return self.step_gait(problem, step, gait.found, near=near),
@@ -657,8 +657,8 @@ class GaitPlanner:
         """The settings of a plan solved again on its estimate's grid (``ESTIMATE_ITERATIONS``)."""
         return replace(self.settings, max_iterations=ESTIMATE_ITERATIONS)
 
-    def _estimated(self, grid: Grid, problem: GaitProblem, plans: tuple[Gait, ...], coarse: tuple[Gait, ...] | None,
-                   again: Callable[[], tuple[Gait, ...]]) -> tuple[Gait, ...]:
+    def _estimated(self, grid: PlanGrids, problem: GaitProblem, plans: tuple[Gait, ...],
+                   coarse: tuple[Gait, ...] | None, again: Callable[[], tuple[Gait, ...]]) -> tuple[Gait, ...]:
         """The steps of a plan (``plans``, on ``grid``) with their integration errors
         (``richardson``): against ``coarse``, the same steps on the estimate's grid, if solved
         already; else against ``again()``, the plan solved again there, unless an end point already
@@ -670,7 +670,7 @@ class GaitPlanner:
         return tuple(replace(plan, accuracy=richardson.estimate(plan, other, end, grid.ratio))
                      for plan, other, end in zip(plans, coarse or (None,) * len(plans), ends))
 
-    def _multipliers(self, grid: Grid, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
+    def _multipliers(self, grid: PlanGrids, problem: GaitProblem, step: BvpSolution, impulses: ImpulseSolution,
                      flow: Future[FlowResult]) -> Multipliers:
         """The open-loop multipliers of the solved ``step`` with its ``impulses``, from ``flow``,
         the step's variational flow on ``grid`` begun on the background thread (waited for here)."""

@@ -29,7 +29,7 @@ from ..dynamics.hybrid import HybridStep
 FD_STEP = 1e-6  # rad: central differences of the reset's configuration dependence
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Multipliers:
     """The Floquet multipliers of a gait's Poincare map (complex, by decreasing modulus), its
     spectral radius and whether it is below 1 (``stable``)."""

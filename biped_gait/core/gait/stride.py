@@ -31,7 +31,7 @@ from .turning import TurningConfiguration
 FD_STEP = 1e-6  # rad: the configurations' theta derivatives
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StrideSolution:
     """The two steps of a stride (A on the right foot, B on the left, each in its own model
     coordinates) as ballistic-step solutions, and the outcome of their joint solve."""
@@ -42,17 +42,28 @@ class StrideSolution:
     steps: tuple[BvpSolution, BvpSolution]
 
 
+@dataclass(frozen=True)
 class StrideProblem:
-    """The residual F(u) of the stride's shooting problem, u = [qd_A(0), theta_1, qd_B(0),
-    theta_2], and its Jacobian, for one (L m, T s, alpha rad, mode, R m)."""
+    """What the shooting of a stride solves: L (m), T (s), alpha (rad), the mode and the turn
+    radius R (m, signed: positive turns left)."""
 
-    def __init__(self, hybrid: HybridStep, step_length: float, period: float, alpha: float, mode: GaitMode,
-                 radius: float, closure_targets: tuple[float, float] = (0.0, 0.0)):
-        self.hybrid, self.period, self.radius = hybrid, period, radius
-        self.closure_targets = closure_targets  # kg m^2/s at C1 and C2 (``bvp.solve_bvp``'s closure_target)
+    step_length: float
+    period: float
+    arm_amplitude: float
+    mode: GaitMode
+    radius: float
+
+
+class StrideResidual:
+    """The residual F(u) of the shooting of the stride ``problem``, u = [qd_A(0), theta_1,
+    qd_B(0), theta_2], and its Jacobian, its closure gaps made ``closure_targets``."""
+
+    def __init__(self, hybrid: HybridStep, problem: StrideProblem, closure_targets: tuple[float, float] = (0.0, 0.0)):
+        self.hybrid, self.period, self.radius = hybrid, problem.period, problem.radius
+        self.closure_targets = closure_targets  # kg m^2/s at C1 and C2 (``bvp.StepProblem``'s closure_target)
         self.turning = TurningConfiguration(hybrid.bm)
         self.n = hybrid.bm.nq
-        self.step_length, self.alpha, self.mode = step_length, alpha, mode
+        self.step_length, self.alpha, self.mode = problem.step_length, problem.arm_amplitude, problem.mode
         self.evaluations = 0
 
     @property
@@ -121,16 +132,16 @@ class StrideProblem:
         return f, jac, runs
 
 
-def solve_stride(hybrid: HybridStep, flow: BallisticFlow, step_length: float, period: float, arm_amplitude: float,
-                 mode: GaitMode, radius: float, guess: tuple[np.ndarray, float, np.ndarray, float],
-                 settings: Settings = DEFAULTS, coarse: BallisticFlow | None = None,
-                 closure_targets: tuple[float, float] = (0.0, 0.0)) -> StrideSolution:
-    """Solve the stride from ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) on ``flow``'s grid:
+def solve_stride(hybrid: HybridStep, flow: BallisticFlow, problem: StrideProblem,
+                 guess: tuple[np.ndarray, float, np.ndarray, float], settings: Settings = DEFAULTS,
+                 coarse: BallisticFlow | None = None, closure_targets: tuple[float, float] = (0.0, 0.0)
+                 ) -> StrideSolution:
+    """Solve the stride ``problem`` from ``guess`` = (qd_A(0), theta_1, qd_B(0), theta_2) on ``flow``'s grid:
     Newton on ``coarse`` (if given) finished by chord steps on ``flow``, else Newton on ``flow``.
     ``settings.tolerance`` bounds the end-point residuals (rad) and the closure gaps' distance to
     ``closure_targets`` (kg m^2/s, at C1 and C2: what the spin moments change, as in
-    ``bvp.solve_bvp``)."""
-    system = StrideProblem(hybrid, step_length, period, arm_amplitude, mode, radius, closure_targets)
+    ``bvp.StepProblem``)."""
+    system = StrideResidual(hybrid, problem, closure_targets)
     u0 = np.concatenate([guess[0], [guess[1]], guess[2], [guess[3]]])
     tol = settings.tolerance
     newton_flow = coarse or flow
@@ -146,7 +157,8 @@ def solve_stride(hybrid: HybridStep, flow: BallisticFlow, step_length: float, pe
     return _solution(system, flow, result, iterations)
 
 
-def _solution(system: StrideProblem, flow: BallisticFlow, result: newton.SolveResult, iterations: int) -> StrideSolution:
+def _solution(system: StrideResidual, flow: BallisticFlow, result: newton.SolveResult, iterations: int
+              ) -> StrideSolution:
     """Package both steps on ``flow``'s grid, with their nodes."""
     u = result.x
     _, _, runs = system(flow, u, False, keep_nodes=True)

@@ -47,7 +47,7 @@ def turning_fingerprint(params: BipedParams) -> str:
     return code_digest(model_fingerprint(params), TURNING_CODE)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TurningGrid:
     """The turning atlas's axes: L (m), T (s), alpha (rad), kappa (1/m, from 0), each ascending."""
 
@@ -75,7 +75,7 @@ class TurningGrid:
         return all(axis[0] - 1e-9 <= x <= axis[-1] + 1e-9 for axis, x in zip(self.axes, point))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class TurningAtlas:
     """The strides of ``params`` (its name) and ``mode`` on ``grid``; ``nodes`` maps each name
     of ``NODE_ARRAYS`` to its array."""

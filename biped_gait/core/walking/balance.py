@@ -123,13 +123,15 @@ def standing_pose(chain: ClosedChain, stance_length: float = STANCE_LENGTH, widt
     return StandingPose(q, torque, chain.full_force(held), stance_length, configurations.width(width), theta)
 
 
-def _linearization(chain: ClosedChain, pose: StandingPose, basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A (2m x 2m) and B (2m x nA) of the closed chain about ``pose`` in the minimal coordinates x =
-    N' delta q, their rates, the torques' deviation (central differences of the forward dynamics)."""
+def linearization(chain: ClosedChain, q: np.ndarray, qd: np.ndarray, torque: np.ndarray,
+                  basis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A (2m x 2m) and B (2m x nA) of the closed chain about the state (``q``, ``qd``) under the
+    actuated joints' ``torque`` (N m), in the minimal coordinates x = N' delta q, their rates
+    N' delta qd, the torques' deviation (central differences of the forward dynamics)."""
     m, na = basis.shape[1], len(chain.actuated)
 
     def rates(x: np.ndarray, xd: np.ndarray, du: np.ndarray) -> np.ndarray:
-        qdd = chain.forward(pose.q + basis @ x, basis @ xd, pose.torque + du)[0]
+        qdd = chain.forward(q + basis @ x, qd + basis @ xd, torque + du)[0]
         return basis.T @ qdd
 
     h = FD_STEP
@@ -148,6 +150,29 @@ def _linearization(chain: ClosedChain, pose: StandingPose, basis: np.ndarray) ->
     return a, b
 
 
+def minimal_basis(chain: ClosedChain, q: np.ndarray) -> np.ndarray:
+    """N (nq x m): an orthonormal basis of the null space of the held rows at ``q``."""
+    c = chain.rows_of(q)
+    return np.linalg.svd(c)[2][c.shape[0]:].T
+
+
+def effort_limits(chain: ClosedChain) -> np.ndarray:
+    """The actuated joints' effort limits (N m), from the joint table."""
+    return np.array([chain.bm.coordinates[k].spec.limits.effort for k in chain.actuated])
+
+
+def lqr_gain(a: np.ndarray, b: np.ndarray, limits: np.ndarray, position_scale: float = POSITION_SCALE,
+             rate_scale: float = RATE_SCALE) -> np.ndarray:
+    """The LQR gain K (nA x 2m) of (``a``, ``b``) with Bryson's weights (module docstring): each
+    minimal coordinate's ``position_scale`` (rad) and rate's ``rate_scale`` (rad/s) against
+    ``TORQUE_SCALE`` of each joint's effort limit ``limits`` (N m)."""
+    m = a.shape[0] // 2
+    q_weight = np.diag(np.concatenate([np.full(m, 1 / position_scale ** 2), np.full(m, 1 / rate_scale ** 2)]))
+    r_weight = np.diag(1.0 / (TORQUE_SCALE * limits) ** 2)
+    p = solve_continuous_are(a, b, q_weight, r_weight)
+    return np.linalg.solve(r_weight, b.T @ p)
+
+
 def uncontrollable(a: np.ndarray, b: np.ndarray) -> list[complex]:
     """The eigenvalues of ``a`` with Re >= 0 that ``b`` cannot move (the PBH test)."""
     out = []
@@ -164,19 +189,14 @@ def uncontrollable(a: np.ndarray, b: np.ndarray) -> list[complex]:
 def balance(chain: ClosedChain, pose: StandingPose) -> Balance:
     """The LQR that holds ``pose`` (module docstring); ``BalanceError`` if an unstable mode of the
     linearization is not controllable."""
-    c = chain.rows_of(pose.q)
-    basis = np.linalg.svd(c)[2][c.shape[0]:].T  # orthonormal null space of the held rows
-    a, b = _linearization(chain, pose, basis)
+    basis = minimal_basis(chain, pose.q)
+    a, b = linearization(chain, pose.q, np.zeros_like(pose.q), pose.torque, basis)
     stuck = uncontrollable(a, b)
     if stuck:
         raise BalanceError(f"standing cannot be held: its unstable mode(s) {', '.join(f'{v.real:.3g} 1/s' for v in stuck)} "
                            "cannot be moved by the joint torques")
-    m = basis.shape[1]
-    limits = np.array([chain.bm.coordinates[k].spec.limits.effort for k in chain.actuated])
-    q_weight = np.diag(np.concatenate([np.full(m, 1 / POSITION_SCALE ** 2), np.full(m, 1 / RATE_SCALE ** 2)]))
-    r_weight = np.diag(1.0 / (TORQUE_SCALE * limits) ** 2)
-    p = solve_continuous_are(a, b, q_weight, r_weight)
-    gain = np.linalg.solve(r_weight, b.T @ p)
+    limits = effort_limits(chain)
+    gain = lqr_gain(a, b, limits)
     return Balance(chain, pose, basis, gain, np.linalg.eigvals(a), np.linalg.eigvals(a - b @ gain), limits)
 
 

@@ -78,7 +78,7 @@ class Sample:
         return tuple(foot.side for foot in self.feet)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StepSamples:
     """Samples of one phase as ``Walk.batches`` yields them (all of a step's phase, or those on one
     side of a push): each ``Sample`` (without its ``world``), and the robot in world terms at
@@ -140,7 +140,7 @@ class CouldNotStart:
     reason: str
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StepOutcome:
     """One step (``runner.Walker.walk_step``): its samples, and its touchdown or the reason the
     robot fell; the pushes that acted in it."""

@@ -94,13 +94,14 @@ class Feedback:
         return aim
 
     def reaim_velocity(self, aim: Aim, q_start: np.ndarray, impact: ImpactMap, xd_b: np.ndarray,
-                       foot_line_moment: float, again: bool = False) -> tuple[np.ndarray, float]:
+                       foot_line_moment: float, again: bool = False, steps: int | None = None) -> tuple[np.ndarray, float]:
         """The next step's initial velocity (its own coordinates, rad/s) and duration (s): the
         flow from ``q_start`` reaches ``aim``'s touchdown configuration q_T exactly, and the
         velocity is reachable through this double support (the momentum about the feet line is
         kept, up to the ``foot_line_moment`` (kg m^2/s) the ground's spin moments change).
         ``aim``: the next step's, its ``next_period`` the warm start; ``again``: the same touchdown
-        as the last re-aim, with another ``foot_line_moment`` (a closure round).
+        as the last re-aim, with another ``foot_line_moment`` (a closure round); ``steps``: the chord
+        steps allowed (None: ``settings.reaim_steps``).
 
         Chord steps with the planned orbit's Jacobian: off the orbit by a numerical error
         only, they converge to rounding level in one or two steps. With momentum steering, the
@@ -131,7 +132,7 @@ class Feedback:
             return np.append(run.q - q_t, gain @ v - target_momentum), None
 
         x0 = np.append(np.asarray(orbit.qd_a), aim.next_period)
-        result = newton.chord(residual, x0, jac, 1e-12, self.settings.reaim_steps)
+        result = newton.chord(residual, x0, jac, 1e-12, steps or self.settings.reaim_steps)
         if result.status == newton.DIVERGED:
             raise Fall("re-aiming the next step diverged: the state is too far from the plan")
         if not result.converged:

@@ -12,7 +12,7 @@ from ..dynamics.impulses import EffortOptions
 from ..gait.configurations import GaitMode
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PlannedOrbit:
     """What a walk needs of a plan: the parameter set (name or file), the gait's L (m), T (s),
     alpha (rad), mode, effort, the boundary configurations q0 and q_t (rad), the velocities
@@ -20,8 +20,9 @@ class PlannedOrbit:
     impulses are chosen (friction cone, joint-rate bound, the effort's reading), what the
     ground's spin moments change of the momentum about the feet line in the double support that
     ends the step (kg m^2/s; zero but for legs leaning, docs/model.md section 5.2), the trunk
-    pitch theta of its touchdown configuration (rad) and the radius of the circle it is a step
-    of (m, signed; inf: straight)."""
+    pitch theta of its touchdown configuration (rad), the radius of the circle it is a step
+    of (m, signed; inf: straight), and the double support that lasts at its end, to track
+    (``held_support.HeldSupport``; None: the paper's instantaneous one)."""
 
     params: str
     step_length: float
@@ -40,6 +41,7 @@ class PlannedOrbit:
     foot_line_moment: float = 0.0
     theta: float = math.nan
     turn_radius: float = math.inf
+    double_support: object = None
 
     @classmethod
     def of(cls, gait) -> "PlannedOrbit":

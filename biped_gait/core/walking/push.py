@@ -37,7 +37,7 @@ def horizontal_impulse(magnitude: float, direction: float) -> np.ndarray:
     return magnitude * np.array([math.cos(direction), math.sin(direction), 0.0])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Push:
     """An impulse ``impulse`` (N s, world axes, at the trunk's CoM) at ``time_in_step`` (s after
     the start of the step it acts in; if the step touches down first, it acts on the pre-impact
@@ -55,7 +55,7 @@ class Push:
         object.__setattr__(self, "impulse", impulse)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class AppliedPush:
     """A push as it acted: in ``step`` (on the ``stance_side`` foot) at ``t`` (s in the walk),
     ``time_in_step`` (s), the impulse (N s, world axes) and the velocity jump it gave (rad/s,

@@ -56,7 +56,7 @@ def prepare_walking() -> None:
     import scipy.optimize  # noqa: F401
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class PhaseRun:
     """One phase as the runner walked it: its samples, the pushes that acted in it, the events its
     reset returned, and the reason the robot fell ('' if it did not)."""
@@ -247,11 +247,11 @@ class Walker:
             return samples, ""
         ctx = self.context
         q, qd, measured = self.engine.sample(self._workspace, segments, taus, jumps)
-        forces, lowest = phase.evaluate(ctx, q, qd)
+        torques = motion.torques(q, qd, np.array(taus))
+        forces, lowest = phase.evaluate(ctx, q, qd, torques)
         moved = None
         if measured is not None:
             forces, moved = measured.forces, measured.moved
-        torques = motion.torques(q, qd, np.array(taus))
         feet = phase.feet(s)
         friction = min(self.engine.contact_friction, phase.friction)
         checked_after = LINKS_CHECKED_AFTER * s.aim.period

@@ -89,7 +89,7 @@ def pose_configuration(hybrid: HybridStep, orbit: PlannedOrbit, pose: Pose) -> n
     return boundary_configurations(hybrid.bm)(pose.step_length, orbit.arm_amplitude, orbit.mode, pose.theta)[1]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class BallisticStep:
     """One start or stop step: from the double support at ``q_from`` (in the coordinates of the
     step before) with initial velocity ``qd_a`` (rad/s, its own coordinates, starting at ``q0``)
@@ -111,8 +111,8 @@ class BallisticStep:
         return describe(figure_limits(*values, knee_lower), *values)
 
 
-@dataclass(frozen=True)
-class DoubleSupport:
+@dataclass(frozen=True, eq=False)
+class StartStopSupport:
     """A double support of a start or a stop at ``q`` (rad) from ``qd_b`` (this step's, rad/s) to
     the next step's ``qd_a`` (zero for a stop's last): the LP's impulses, the friction each
     reaction impulse needs, and the next step's velocity after running the impulses forward
@@ -131,23 +131,23 @@ class DoubleSupport:
         return self.impulses.W
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StopPlan:
     """A stop: the stop step from the touchdown to the standing ``pose``, and the double support
     that brings the robot to rest there (``rest``)."""
 
     pose: Pose
     step: BallisticStep
-    rest: DoubleSupport
+    rest: StartStopSupport
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StartPlan:
     """A start: from rest in ``pose``, the double support ``launch`` and the start step to the
     gait's touchdown configuration, where it arrives with the gait's feet-line momentum."""
 
     pose: Pose
-    launch: DoubleSupport
+    launch: StartStopSupport
     step: BallisticStep
 
 
@@ -320,7 +320,7 @@ def com_friction(hybrid: HybridStep, q: np.ndarray, xd_before: np.ndarray, xd_af
 
 
 def double_support(hybrid: HybridStep, orbit: PlannedOrbit, q: np.ndarray, qd_b: np.ndarray,
-                   qd_a: np.ndarray | None, what: str) -> DoubleSupport:
+                   qd_a: np.ndarray | None, what: str) -> StartStopSupport:
     """The double support at ``q`` from ``qd_b`` (this step's, rad/s) to the next step's ``qd_a``
     (None: to rest, every velocity zero), its impulses by ``orbit``'s effort and options (the
     friction cone), made consistent by the least change along the locked rotation (rounding on a
@@ -341,8 +341,8 @@ def double_support(hybrid: HybridStep, orbit: PlannedOrbit, q: np.ndarray, qd_b:
         raise StartStopError(f"{what}: no impulses ({sol.message}{needed}; the floor's mu = "
                              f"{orbit.options.friction:g})")
     after = impact.forward(qd_b, sol.i_minus, sol.i_plus)
-    return DoubleSupport(np.asarray(q), np.asarray(qd_b), np.zeros(n) if qd_a is None else np.asarray(qd_a), sol,
-                         friction_ratios(sol), after)
+    return StartStopSupport(np.asarray(q), np.asarray(qd_b), np.zeros(n) if qd_a is None else np.asarray(qd_a),
+                            sol, friction_ratios(sol), after)
 
 
 def why_not(kind: str, hybrid: HybridStep, orbit: PlannedOrbit, grid: int) -> str:

@@ -81,7 +81,7 @@ def pelvis_pitch(bm: BipedModel, q: np.ndarray) -> float:
     return float(q[bm.index("ankle_pitch")] + q[bm.index("knee")] + q[bm.index("hip_pitch")])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SteeringReference:
     """The gait step the re-aim steers to, linearized on its orbit: touchdown configuration q_T
     (rad), initial and final velocities (rad/s), duration (s), trunk pitch theta_p (rad),

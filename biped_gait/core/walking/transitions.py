@@ -42,7 +42,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..gait.atlas import Atlas, AtlasError, atlas_path
-from ..gait.bvp import solve_bvp
+from ..gait.bvp import StepProblem, solve_bvp
 from ..gait.planner import BRANCH_BOUND, GaitPlanner, GaitRequest, StrideGuess
 from ..dynamics.settings import Settings
 from .speed import MAX_SLOPE, MIN_AUTHORITY, FixedCadence, LeastEffort, SpeedRule, walkable_nodes
@@ -71,10 +71,10 @@ PUT_OFF = 0.5  # a transition the walker put off: the next one this fraction of 
 
 
 @dataclass(frozen=True)
-class Transition:
-    """One transition: before ``step``, towards ``speed`` (m/s, commanded ``commanded``) and the
-    curvature ``curvature`` (1/m), the gait (L m, T s) and how long solving its orbit took (s), or
-    why it failed (``failure``)."""
+class GaitChange:
+    """One transition, a change of the gait aimed at: before ``step``, towards ``speed`` (m/s,
+    commanded ``commanded``) and the curvature ``curvature`` (1/m), the gait (L m, T s) and how
+    long solving its orbit took (s), or why it failed (``failure``)."""
 
     step: int
     commanded: float
@@ -135,7 +135,7 @@ class SpeedFollower:
         self._held: tuple[float, float] | None = None  # a command none of whose transitions could be reached
         self._lock = threading.Lock()
         self._put_offs = 0  # transitions the walker put off since the last it made
-        self.transitions: list[Transition] = []
+        self.transitions: list[GaitChange] = []
 
     @property
     def envelope(self) -> Envelope:
@@ -167,7 +167,7 @@ class SpeedFollower:
             self._commanded = (clamped, curvature)
         return clamped, curvature * clamped, moved or turned
 
-    def before_step(self, walker: Walker) -> Transition | None:
+    def before_step(self, walker: Walker) -> GaitChange | None:
         """Aim ``walker``'s next step one transition closer to the commanded speed and turn (None
         if it is at them already, no command came, or the command is held). A transition that
         cannot be reached is replaced by the nearest one that can (``NEARER``); if none can, the
@@ -213,7 +213,7 @@ class SpeedFollower:
             # more momentum than the steering follows in a step: the part of the transition it can
             reach = (lag + math.copysign(limit, change)) / change * fraction if change else 0.0
             if reach <= 0.0:  # the walker is behind its gait already: it catches up first
-                self.transitions.append(Transition(walker.state.step, commanded, self.speed, self.orbit.step_length,
+                self.transitions.append(GaitChange(walker.state.step, commanded, self.speed, self.orbit.step_length,
                                                    self.orbit.period, time.perf_counter() - start, "",
                                                    self.curvature, waited=True))
                 return self.transitions[-1]
@@ -226,7 +226,7 @@ class SpeedFollower:
             step_length = float(speed * period)
             failures.append(f"holding the gait L = {self.orbit.step_length:.3f} m, T = {self.orbit.period:.3f} s"
                             f"{f', R = {1.0 / curvature:.3g} m' if curvature else ''} until the command changes")
-        transition = Transition(walker.state.step, commanded, float(speed), step_length, float(period),
+        transition = GaitChange(walker.state.step, commanded, float(speed), step_length, float(period),
                                 time.perf_counter() - start, "; ".join(failures) if orbit is None else "",
                                 curvature)
         self.transitions.append(transition)
@@ -332,7 +332,7 @@ class SpeedFollower:
             guesses.insert(0, atlas_guess)
         message = "no warm start"
         for guess in guesses:
-            step = solve_bvp(hybrid, flow, step_length, period, current.arm_amplitude, current.mode, "theta", guess,
+            step = solve_bvp(hybrid, flow, StepProblem(step_length, period, current.arm_amplitude, current.mode), guess,
                              self.settings, coarse)
             if not (step.converged and float(np.max(np.abs(step.qd_a - guess[0]))) <= BRANCH_BOUND):
                 message = step.message if not step.converged else "the solve left the human-like branch"

@@ -95,6 +95,16 @@ class Walk:
         if not all(o.admissible for o in cycle):
             self.problem = "the plan is not admissible: " + "; ".join(r for o in cycle for r in o.reasons)
             return
+        if any(o.double_support is not None for o in cycle):
+            if engine == "mujoco":
+                self.problem = ("a double support that lasts is walked by the hybrid engine only: MuJoCo's floor holds "
+                                "each foot sideways, which the plan's closed chain leaves free, and the new foot slides "
+                                "(docs/model.md section 14.1)")
+                return
+            if momentum_rate is not None:
+                self.problem = ("a double support that lasts is walked with the duration re-aim (recovery 'duration'): "
+                                "the momentum steering moves the touchdown posture off the phase's plan")
+                return
         try:
             self.model = BipedModel.from_params(load_params(self.orbit.params or None))
         except ValueError as exc:

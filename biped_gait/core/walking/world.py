@@ -57,7 +57,7 @@ class WorldState:
     link_transforms: list[Transform]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class WorldPictures:
     """Many instants of the walk in world terms, one per row, for one stance foot: what a
     ``WorldState`` holds for one instant (SI units; quaternions x, y, z, w)."""

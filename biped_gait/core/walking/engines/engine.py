@@ -36,14 +36,15 @@ class Pulse:
 @dataclass(frozen=True, eq=False)
 class Held:
     """Both foot tips held (the closed chain ``chain``, core/dynamics/closed_chain.py), the actuated
-    joints driven by the feedback law ``law(q, qd)`` (N m)."""
+    joints driven by the feedback law ``law(t, q, qd)`` (N m; t in the step, s)."""
 
     chain: ClosedChain
-    law: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    law: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
-    def acceleration(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """qdd (rad/s^2) of the closed chain at (``q``, ``qd``) under the law's torques."""
-        return self.chain.forward(q, qd, self.law(q, qd))[0]
+    def acceleration(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """qdd (rad/s^2) of the closed chain at ``t`` (s in the step) in (``q``, ``qd``) under the
+        law's torques."""
+        return self.chain.forward(q, qd, self.law(t, q, qd))[0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,7 +71,7 @@ class Motion:
         if self.held is not None:
             actuated = self.held.chain.actuated
             for k in range(len(q)):
-                out[k, actuated] += self.held.law(q[k], qd[k])
+                out[k, actuated] += self.held.law(taus[k], q[k], qd[k])
         return out
 
 

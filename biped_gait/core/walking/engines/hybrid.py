@@ -18,8 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...dynamics.flow import hermite_samples
-from ...dynamics.hybrid import HybridStep
-from ..finite_support import passive_impact
+from ...dynamics.hybrid import HybridStep, passive_impact
 from .engine import Held, Motion
 
 
@@ -42,14 +41,15 @@ class HybridSegment:
     touchdown: bool
 
 
-def held_step(held: Held, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
+def held_step(held: Held, t: float, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+              h: float) -> tuple[np.ndarray, np.ndarray]:
     """One classical RK4 step of ``h`` s of the closed chain of ``held``, its joints driven by its
-    law at each stage, from (``q``, ``qd``) whose acceleration is ``qdd``."""
+    law at each stage, from (``q``, ``qd``) at ``t`` (s in the step) whose acceleration is ``qdd``."""
     rate = held.acceleration
     k1 = qd, qdd
-    k2 = qd + h / 2 * k1[1], rate(q + h / 2 * k1[0], qd + h / 2 * k1[1])
-    k3 = qd + h / 2 * k2[1], rate(q + h / 2 * k2[0], qd + h / 2 * k2[1])
-    k4 = qd + h * k3[1], rate(q + h * k3[0], qd + h * k3[1])
+    k2 = qd + h / 2 * k1[1], rate(t + h / 2, q + h / 2 * k1[0], qd + h / 2 * k1[1])
+    k3 = qd + h / 2 * k2[1], rate(t + h / 2, q + h / 2 * k2[0], qd + h / 2 * k2[1])
+    k4 = qd + h * k3[1], rate(t + h, q + h * k3[0], qd + h * k3[1])
     return (q + h / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0]),
             qd + h / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1]))
 
@@ -77,10 +77,10 @@ class HybridEngine:
         h, t = motion.h, ws.t
         dt = t_stop - t if t < t_stop < t + h else h
         if motion.held is not None:
-            qdd = motion.held.acceleration(ws.q, ws.qd)  # RK4's first stage and the segment's first node
-            q, qd = held_step(motion.held, ws.q, ws.qd, qdd, dt)
+            qdd = motion.held.acceleration(t, ws.q, ws.qd)  # RK4's first stage and the segment's first node
+            q, qd = held_step(motion.held, t, ws.q, ws.qd, qdd, dt)
             nodes = (np.array([t, t + dt]), np.array([ws.q, q]), np.array([ws.qd, qd]),
-                     np.array([qdd, motion.held.acceleration(q, qd)]))
+                     np.array([qdd, motion.held.acceleration(t + dt, q, qd)]))
             ws.t, ws.q, ws.qd = t + dt, q, qd
             return HybridSegment(nodes, ws.t, False)
         run = self.flow.propagate(ws.q, ws.qd, dt, keep_nodes=True)

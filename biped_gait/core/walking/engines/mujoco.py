@@ -153,7 +153,7 @@ class MujocoEngine:
         """The floating robot's state measured, the held law's torques at it applied (until the next
         step's end: the control rate is MuJoCo's step's)."""
         ws.measured = self.floating.measure(ws.floor)
-        self.floating.apply(ws.floor, ws.held.law(*ws.measured))
+        self.floating.apply(ws.floor, ws.held.law(ws.t - ws.origin, *ws.measured))
 
     def _reaction(self, ws: MujocoWorkspace) -> np.ndarray:
         """[[Fx, Fy, Fz, Mz]] (1 x 4: N, N m, the step's model axes) the ground exerts on the stance tip

@@ -1,28 +1,20 @@
 """The paper's walk as phases (docs/model.md sections 8.2-8.5): the ballistic single support,
 ended by the swing foot's touchdown, and the instantaneous double support, whose reset re-aims
 the next step from the actual pre-impact state (``feedback``), re-solves the impulses by the
-effort LP towards it and exchanges the legs.
-
-The impulsive double support's reset (``impulsive_double_support``) is also what a double
-support that lasts aims at (``pulses``). Units SI, rad; times in the step.
+effort LP towards it and exchanges the legs (``reaim``). A step whose plan has a double support
+that lasts goes on to it instead (``lasting``). Units SI, rad; times in the step.
 """
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
-import numpy as np
-
-from ...dynamics.impulses import friction_ratios, solve_impulses
-from ...model.exchange import next_heading, other_side
 from ..engines.engine import Motion
-from ..events import DOUBLE_SUPPORT, Fall, Touchdown
-from ..orbit import PlannedOrbit
+from ..events import DOUBLE_SUPPORT
 from ..state import WalkState
+from .lasting import HeldTouchdown
 from .phase import End, Guard, Phase, Transition, WalkContext
-
-CLOSURE_ROUNDS = 10  # re-aims per double support at most, with legs leaning (the planner's rounds)
+from .reaim import impulsive_double_support
 
 
 def single_support_guard(state: WalkState) -> Guard:
@@ -52,7 +44,9 @@ class ImpulsiveDoubleSupport(Phase):
 @dataclass(frozen=True, eq=False)
 class SingleSupport(Phase):
     """The ballistic single support (the planner's model: no joint torque), until the swing foot's
-    touchdown; then ``next``, the double support of the walk (by default the impulsive one)."""
+    touchdown; then the double support that lasts if the step's plan has one
+    (``lasting.HeldTouchdown``), else ``next``, the double support of the walk (by default the
+    impulsive one)."""
 
     next: Phase = field(default_factory=ImpulsiveDoubleSupport)
 
@@ -63,100 +57,7 @@ class SingleSupport(Phase):
         return single_support_guard(state)
 
     def reset(self, ctx: WalkContext, state: WalkState, end: End) -> Transition:
-        return Transition(self.next, state.moved(end.t, end.q, end.qd))
+        following = self.next if state.aim.orbit.double_support is None else HeldTouchdown(self)
+        return Transition(following, state.moved(end.t, end.q, end.qd))
 
 
-def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarray, qd_td: np.ndarray,
-                             t_step: float) -> tuple[WalkState, Touchdown]:
-    """The double support at the touchdown (``q_td``, ``qd_td``) ``t_step`` s into ``state``'s step
-    (docs/model.md section 8.4): the aim moved on to the next step, the next step re-aimed (or the
-    plan's velocity made reachable, without re-aiming), the impulses from the actual pre-impact
-    state by the effort LP, then the leg exchange. The next step's start and the touchdown report;
-    ``Fall`` if no re-aim or no impulses reach it."""
-    hybrid, feedback, bm, s = ctx.hybrid, ctx.feedback, ctx.hybrid.bm, state
-    q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
-    error = max(float(np.max(np.abs(q_td - q_t))), float(np.max(np.abs(qd_td - qd_b))))
-    side = other_side(s.stance_side)
-    try:
-        aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step, feedback.advanced(s.aim, side), error)
-    except Fall:
-        if s.aim.pending is None:
-            raise
-        # a transition step the re-aim cannot make from this touchdown: put off, the walked gait aimed at again
-        aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step,
-                                                        feedback.advanced(replace(s.aim, pending=None), side), error)
-    # The new stance foot's world position, then the mirror: the next step in model coordinates.
-    new_foot = s.stance_foot + s.axes @ bm.swing_tip(q_td)
-    new_foot[2] = 0.0
-    exchange = hybrid.exchange
-    following = WalkState(q=exchange.configuration(q_td), qd=exchange.velocity(q_td, xd_a), aim=aim, step=s.step + 1,
-                          t=s.t + t_step, stance_side=side, stance_foot=new_foot,
-                          heading=next_heading(s.heading, side, exchange.heading(q_td)))
-    touchdown = Touchdown(
-        step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
-        W=sol.W, state_error=error, velocity_miss=abs(miss),
-        correction=float(np.max(np.abs(xd_a[3:] - planned.xd_a[3:]))), equation_residual=sol.equation_residual,
-        next_stance_side=side,
-    )
-    return following, touchdown
-
-
-def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.ndarray, t_step: float, aim,
-                    error: float):
-    """The re-aim towards ``aim`` (the next step's) and the impulses from the touchdown (``q_td``,
-    ``qd_td``) ``t_step`` s into ``s``'s step, in closure rounds with legs leaning: the aim with the
-    re-aim's duration, the post-impact velocity, the impulses, the impact problem planned towards
-    the plan's velocity and its velocity miss. ``Fall`` if no re-aim or no impulses reach it."""
-    hybrid, feedback, bm = ctx.hybrid, ctx.feedback, ctx.hybrid.bm
-    q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
-    foot_line_moment = s.aim.orbit.foot_line_moment  # the plan's, of this double support
-    impact = hybrid.impact(q_td)
-    planned = impact.problem(qd_td, np.asarray(aim.orbit.qd_a))
-    reachable, miss = planned.reachable()
-    for again in range(CLOSURE_ROUNDS):  # legs leaning: the re-aim's closure matched to what the spin moments do
-        if feedback.reaim:
-            try:
-                qd_next, next_period = feedback.reaim_velocity(aim, hybrid.exchange.configuration(q_td), impact,
-                                                               planned.xd_b, foot_line_moment, again > 0)
-            except Fall as exc:
-                momentum = float(impact.momentum_row @ planned.xd_b)
-                planned_momentum = float(hybrid.impact(q_t).momentum_row @ bm.embed(qd_b))
-                raise Fall(f"{exc} (at t = {s.t + t_step:.4f} s the momentum about the feet line, which no "
-                           f"impulse changes, is {momentum:.2f} kg m^2/s where the plan's is "
-                           f"{planned_momentum:.2f}, the touchdown {error:.3g} from the plan's state)") from None
-            aim = replace(aim, next_period=next_period)
-            problem = replace(planned, xd_a=impact.next_step_velocity(qd_next))
-        else:
-            problem = reachable
-        xd_a = problem.xd_a
-        if not np.all(np.isfinite(xd_a)):
-            raise Fall(f"no reachable velocity after the touchdown at t = {s.t + t_step:.4f} s")
-        sol = solve_impulses(problem, aim.orbit.effort, aim.orbit.options)
-        if not sol.success:
-            raise Fall(f"the double support at t = {s.t + t_step:.4f} s has no solution ({sol.message}): "
-                       f"{why_no_impulses(problem, aim.orbit)}")
-        done = sol.foot_line_moment(problem)
-        if not feedback.reaim or abs(done - foot_line_moment) <= feedback.settings.tolerance:
-            break
-        foot_line_moment = done
-    return aim, xd_a, sol, planned, miss
-
-
-def why_no_impulses(problem, orbit: PlannedOrbit) -> str:
-    """The physical reason a double support of ``orbit``'s effort and options has no impulses: the
-    friction cone (the impulses exist without it, needing the friction they need: a finite
-    coefficient, or none at all when a foot would need a horizontal impulse with no vertical one),
-    the joint-rate bound, or none reaches the aimed velocity with the feet pushing on the ground."""
-    options = orbit.options
-    if math.isfinite(options.friction):
-        free = solve_impulses(problem, orbit.effort, replace(options, friction=math.inf))
-        if free.success:
-            needed = float(friction_ratios(free).max())
-            if not math.isfinite(needed):
-                return (f"the impulses would need a foot to take a horizontal reaction impulse with no vertical one: "
-                        f"no friction coefficient suffices (the ground's is {options.friction:g})")
-            return f"the impulses would need a friction coefficient of {needed:.2f}, more than the ground's {options.friction:g}"
-    if math.isfinite(options.rate_bound):
-        if solve_impulses(problem, orbit.effort, replace(options, rate_bound=math.inf)).success:
-            return f"the impulses would need joint rates above the bound of {options.rate_bound:g} rad/s"
-    return "no impulses reach the aimed velocity with the feet pushing on the ground (unilateral contact)"

@@ -132,9 +132,11 @@ class Phase:
         """The feet on the ground, the step's stance foot first."""
         return (Foot(state.stance_side, state.stance_foot),)
 
-    def evaluate(self, ctx: WalkContext, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """At the samples (``q``, ``qd``: rows): the contact force [Fx, Fy, Fz, Mz] at each foot on
-        the ground (n x feet x 4, N, N m; an engine that measures them gives its own) and the
-        height of the lowest knee, hip, shoulder or hand (n, m)."""
+    def evaluate(self, ctx: WalkContext, q: np.ndarray, qd: np.ndarray,
+                 torques: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """At the samples (``q``, ``qd``: rows; ``torques``, N m, the joint torques that act there,
+        rows of q's size): the contact force [Fx, Fy, Fz, Mz] at each foot on the ground (n x feet x
+        4, N, N m; an engine that measures them gives its own) and the height of the lowest knee,
+        hip, shoulder or hand (n, m)."""
         evaluated = ctx.hybrid.samples.dynamics(q, qd)
         return evaluated.grf[:, None, :], evaluated.lowest_link

@@ -1,5 +1,5 @@
 """A double support that lasts, walked as torque pulses around the impact (docs/model.md sections
-10 and 11.2-11.3): the phase of ``finite_support``, d / 2 of constant joint torques on each side
+10 and 11.2-11.3): the phase of section 10, d / 2 of constant joint torques on each side
 of a passive impact, with the walk's re-aim as the feedback. Its phases:
 
 - ``Coast``: the ballistic single support, until the double support is planned
@@ -12,7 +12,7 @@ of a passive impact, with the walk's re-aim as the feedback. Its phases:
 
 **The plan** (``Coast``'s reset). From the engine's state it predicts the ballistic touchdown with
 the planner's flow and guard, and hands that pre-impact state to the impulsive double support's
-reset (``impulsive.impulsive_double_support``): the re-aim of the next step (with momentum
+reset (``reaim.impulsive_double_support``): the re-aim of the next step (with momentum
 steering if the walk has it) and the LP's impulses I^-, I^+, exactly as the impulsive walk does at
 its touchdown. The pulses u = I / (d / 2) reach that re-aimed next step only as d -> 0: the
 configuration moves during them (the joints at up to 16 rad/s), and the open-loop step amplifies
@@ -22,7 +22,7 @@ next step's duration tau; equations: the swing tip on the ground at the pre-impa
 (1), and the next step's configuration at tau the re-aimed one's at its touchdown (nq);
 constraints: the stance tip's reaction in the friction cone (the inscribed octagonal pyramid) with
 a positive normal force at every node of both pulses, the impact's reaction likewise, the old
-stance foot leaving, the swing tip coming down; Gauss-Newton (``finite_support.gauss_newton``:
+stance foot leaving, the swing tip coming down; Gauss-Newton (``pulse_dynamics.gauss_newton``:
 least-norm steps, the constraints' least move) from the impulses spread plus the last
 correction's offset from its own, to ``TOLERANCE``. The next step then starts from whatever the
 engine made of the pulses.
@@ -37,13 +37,15 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ...dynamics.hybrid import passive_impact
 from ...model.exchange import exchange_matrix, next_heading, other_side
 from ..engines.engine import Motion, Pulse
 from ..events import Fall, Touchdown
-from ..finite_support import FD_STEP, FiniteSupportFailed, cone_rows, friction_ratio, gauss_newton, passive_impact, pulse
 from ..state import Aim, WalkState
-from .impulsive import impulsive_double_support, single_support_guard
+from .impulsive import single_support_guard
 from .phase import TIME_TOLERANCE, TOUCHDOWN, End, Guard, Phase, Transition, WalkContext
+from .pulse_dynamics import FD_STEP, CorrectionFailed, cone_rows, friction_ratio, gauss_newton, pulse
+from .reaim import impulsive_double_support
 
 DECISION_LEAD = 0.01  # s: the double support is planned this long before its pre-impact pulse is due
 TOLERANCE = 1e-7  # m, rad: the corrected pulses land on the re-aimed next step to this (the next re-aim takes the rest)
@@ -204,7 +206,7 @@ class Coast(Phase):
 
 
 def _exchange_joints(ctx: WalkContext) -> np.ndarray:
-    """u^+ in the next step's joints from I^+ in this step's (``finite_support``: a signed
+    """u^+ in the next step's joints from I^+ in this step's (section 10: a signed
     permutation of the actuated joints, its own inverse transpose)."""
     bm = ctx.hybrid.bm
     return exchange_matrix(bm.coordinates)[np.ix_(bm.actuated, bm.actuated)]
@@ -324,7 +326,7 @@ class _Correction:
     def solve(self, z: np.ndarray, guess: np.ndarray | None = None) -> tuple[np.ndarray, int]:
         """z with the equations met to ``TOLERANCE`` and the constraints, from ``z`` (or
         ``z + guess`` if its residual is smaller), and the Gauss-Newton steps taken
-        (``finite_support.gauss_newton``; the torques scaled by their largest, tau in s; the
+        (``pulse_dynamics.gauss_newton``; the torques scaled by their largest, tau in s; the
         Jacobian ``differences``: the flow's at each step, the pulsed phase's given
         (``phase_jacobian``) or at the first step, and again when a step cannot lower the merit).
         ``Fall`` if it does not converge."""
@@ -334,7 +336,7 @@ class _Correction:
         try:
             return gauss_newton(self.evaluate, lambda x, r, c, fresh: self.differences(x, r, c, phase=fresh), z,
                                 self.scale, TOLERANCE, fresh=self.phase_jacobian is None)
-        except FiniteSupportFailed as exc:
+        except CorrectionFailed as exc:
             raise Fall(f"the double support's pulses of {self.duration * 1e3:g} ms cannot reach the re-aimed next "
                        f"step within the friction cone: {exc}") from None
 

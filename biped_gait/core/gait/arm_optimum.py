@@ -1,5 +1,5 @@
-"""The arm amplitude alpha (rad) that minimizes the effort W (N m s) of a gait, and how the
-other arm mode compares at it.
+"""The arm amplitude alpha (rad) that minimizes the effort W (N m s) of a gait (the planner
+node's optimize action, ``biped-gait optimize-arms``, the studies).
 
 W(alpha) has kinks where the impulse LP changes its active set, so the minimum is bracketed
 on a coarse continuation sweep and refined with ``scipy.optimize.minimize_scalar``
@@ -16,13 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.gait.configurations import GaitMode
-from .executors import planner_for
-from ..core.gait.planner import GaitPlanner, GaitRequest, validate_request
-from ..core.model.params import BipedParams
-from ..core.dynamics.settings import DEFAULTS
-from ..core.gait.gait import Gait
-from .sweep import inclusive_range, solve_chain, solve_near
+from ..dynamics.settings import DEFAULTS
+from .chains import inclusive_range, solve_chain, solve_near
+from .configurations import GaitMode
+from .gait import Gait
+from .planner import GaitPlanner, GaitRequest, validate_request
 
 ALPHA_RANGE = DEFAULTS.arm_range  # rad: the paper's Fig. 4 range
 COARSE_STEP = DEFAULTS.arm_coarse_step  # rad: 31 points on the range
@@ -41,7 +39,7 @@ class NoAdmissibleGait(RuntimeError):
     """No gait of the coarse sweep converged to an admissible gait: there is nothing to minimize."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ArmOptimum:
     """The least effort over an arm-amplitude range ``alpha_range`` (rad) for one gait problem.
 
@@ -107,7 +105,7 @@ def optimal_arm_amplitude(
 ) -> ArmOptimum:
     """Minimize W over alpha in ``alpha_range`` (rad, the coarse sweep every ``coarse_step``
     rad and the upper end) for L (m), T (s), ``mode``, the sweep a continuation chain
-    (``sweep.solve_chain``) from the gait the planner finds first. ``on_result`` sees every gait
+    (``chains.solve_chain``) from the gait the planner finds first. ``on_result`` sees every gait
     solved, coarse and refining, as it comes (progress reports; an exception it raises, such
     as ``Canceled``, ends the search). ``options``: further ``GaitRequest`` fields (friction,
     rate_bound, effort_coordinates).
@@ -171,32 +169,3 @@ def _refine(
         return result.W if result.usable else math.inf
 
     minimize_scalar(effort, bounds=bracket, method="bounded", options={"xatol": DEFAULTS.arm_tolerance})
-
-
-@dataclass(frozen=True)
-class ModeComparison:
-    """The optimum of one mode (``optimum``, the normal gait's in the paper's comparison) and
-    the other mode's gait at the same alpha (``other``; full gaits)."""
-
-    optimum: ArmOptimum
-    other: Gait
-
-
-def compare_modes(
-    params: BipedParams,
-    step_length: float,
-    period: float,
-    alpha_range: tuple[float, float] = ALPHA_RANGE,
-    coarse_step: float = COARSE_STEP,
-    options: Mapping[str, object] | None = None,
-    mode: GaitMode | str = GaitMode.NORMAL,
-) -> ModeComparison:
-    """Worker entry: optimize the gait of ``mode`` (default normal) at L (m), T (s), then solve
-    the other mode's gait at its alpha (the paper's comparison), with this worker's planner for
-    ``params``; ``options``: further ``GaitRequest`` fields of every gait."""
-    planner = planner_for(params)
-    mode = GaitMode.parse(mode)
-    other = GaitMode.ANTI_NORMAL if mode is GaitMode.NORMAL else GaitMode.NORMAL
-    optimum = optimal_arm_amplitude(planner, step_length, period, mode, alpha_range, coarse_step, options=options)
-    [gait] = solve_chain(planner, step_length, period, other.value, (optimum.alpha,), options=options)
-    return ModeComparison(optimum, gait)
