@@ -12,18 +12,20 @@ import pytest
 
 pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
 
-from biped_gait_interfaces.msg import GaitEvent, GaitPlan  # noqa: E402
+from biped_gait_interfaces.msg import DoubleSupportPhase, GaitEvent, GaitPlan  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
 
 from biped_gait.core.gait.configurations import GaitMode  # noqa: E402
+from biped_gait.core.gait import views  # noqa: E402
 from biped_gait.core.gait.views import FIELDS  # noqa: E402
 from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
 from biped_gait.core.walking.orbit import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
-from biped_gait.ros.conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, mode_from_msg, orbit_from_msg,  # noqa: E402
-                                        plan_msg, request_from_msg, request_key, urdf_joints)
+from biped_gait.ros.conversions import (OPTION_NAMES, PHASE_NAMES, POINT_NAMES, gait_fields, mode_from_msg,  # noqa: E402
+                                        orbit_from_msg, phase_msg, plan_msg, request_from_msg, request_key,
+                                        urdf_joints)
 
 pytestmark = pytest.mark.ros
 
@@ -50,7 +52,8 @@ def test_every_message_field_of_the_field_list_carries_the_core_value(planner, d
             assert np.allclose(_as_list(got), _as_list(value), rtol=0, atol=0), field.key
         checked += 1
     # every GaitPlan field but the header, the mode code, the reasons and the trajectory with its joint mapping
-    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs", "stride_effort"}
+    trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs", "stride_effort",
+                  "double_support_phase"}  # the last: a lasting double support's, test_the_phase_message_...
     assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons"} - trajectory)
     assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
     assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)
@@ -64,6 +67,24 @@ def test_every_message_field_of_the_field_list_carries_the_core_value(planner, d
     q = default_gait.figures.samples.q[-1]
     for name, sign, angle in zip(msg.joint_roles, msg.joint_signs, point.positions):
         assert angle == sign * q[list(msg.joint_names).index(name)], name
+
+
+def test_the_phase_message_is_the_plan_jsons_double_support_phase(planner, default_gait):
+    """DoubleSupportPhase has every figure of the JSON's double_support_phase and nothing else,
+    each carried exactly (arrays flattened row by row, no figure: empty), over serialization: the
+    impulsive limit d -> 0+ of the default gait (a tenth of a second; its phase has no samples,
+    the node's test reads a lasting one's)."""
+    limit = planner.lasting.limit(default_gait)
+    phase = views.double_support_phase(limit, limit.effort_total)
+    msg = deserialize_message(serialize_message(phase_msg(phase)), DoubleSupportPhase)
+    assert {PHASE_NAMES.get(key, key) for key in phase} == set(DoubleSupportPhase.get_fields_and_field_types())
+    for key, value in phase.items():
+        got = getattr(msg, PHASE_NAMES.get(key, key))
+        if isinstance(value, (str, bool, int)):
+            assert got == value, key
+        else:
+            assert np.array_equal(np.ravel(got), np.ravel(value if value is not None else [])), key
+    assert len(msg.held_impact_impulses) == 6 and len(msg.i_minus) == 7 and list(msg.next_start_velocity) == []
 
 
 def test_the_orbit_a_walk_needs_survives_the_message(planner, default_gait):

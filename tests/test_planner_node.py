@@ -327,6 +327,10 @@ def test_a_default_constructed_request_plans_the_default_gait(ros, planner, defa
     assert plan.friction == planner.params.friction == 0.5 and math.isinf(plan.rate_bound)
     assert plan.step_width == pytest.approx(planner.params.hip_spacing) and math.isinf(plan.turn_radius)
     assert response.next_steps == []
+    phase = plan.double_support_phase  # double_support 0: the paper's instantaneous double support, no phase
+    assert phase.duration == 0.0 and not phase.success and phase.effort_total == 0.0
+    assert all(len(getattr(phase, name)) == 0 for name in ("t", "x", "torques", "contact_forces", "i_minus",
+                                                           "held_impact_impulses", "next_start_velocity"))
 
 
 # Each float field of PlanGait.Request set to 0 in an otherwise default request: what 0 means
@@ -342,6 +346,7 @@ ZERO_MEANS = {
     "friction_margin": "default",
     "step_width": "default",
     "turn_radius": "default",
+    "double_support": "default",  # 0 is a value: the paper's instantaneous double support, the default
 }
 
 
@@ -419,6 +424,96 @@ def test_the_action_takes_the_gait_options_and_answers_again_from_its_cache(ros,
     assert first.alpha_opt == pytest.approx(expected.alpha, abs=1e-9) and math.degrees(first.alpha_opt) > 26.0  # no cone
     assert again.message == first.message + " (cached)" and again.alpha_opt == first.alpha_opt
     assert list(again.alphas) == list(first.alphas) and fed and not fed_again  # answered at once, no solve
+
+
+# IPOPT's tolerance is 1e-9 on the scaled equations; a thousand times that on the torques' scale of
+# 100 N m (as tests/test_lasting.py): a torque at its limit may pass it by this much.
+TORQUE_TOLERANCE = 1e-4  # N m
+
+
+def test_a_lasting_double_support_is_planned_off_the_spinning_thread(ros, action_client, planner, default_gait,
+                                                                     node_dir):
+    """double_support 0.1 s at the default gait: while IPOPT solves (seconds, on a thread of its
+    own), the node's spinning thread serves: a goal asking for a lasting double support is refused
+    (the action never searches with one). Then the phase: 41 samples from 0 to d, both ends; E
+    above E(0+) (the core's) above W; every torque within the joints' 200 N m; again from the
+    cache. The call and its plan are recorded and read back by two independent readers."""
+    from action_msgs.msg import GoalStatus
+    from rcl_interfaces.msg import Parameter as ParameterMsg, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+
+    started = time.monotonic()
+    pending = ros.client.call_async(plan_request(double_support=0.1))
+    handle, _ = send_goal(ros, action_client, double_support=0.1)
+    refused = handle.get_result_async()
+    ros.wait(refused.done, 30.0)
+    assert not pending.done(), "the lasting solve ended before the node was seen serving during it"
+    assert refused.result().status == GoalStatus.STATUS_ABORTED and not refused.result().result.success
+    assert "instantaneous double support only" in refused.result().result.message
+    ros.wait(pending.done, 300.0)  # seconds to minutes, the programs built first (docs/ros.md)
+    response = pending.result()
+    print(f"\nplan_gait with double_support 0.1 s answered in {time.monotonic() - started:.1f} s: {response.message}")
+    assert response.success, response.message
+    plan, phase = response.plan, response.plan.double_support_phase
+    assert "double support of 0.1 s: E = " in response.message and phase.success and phase.duration == 0.1
+    n, nx, na = len(phase.t), len(plan.double_support_coordinates), len(plan.actuated_joints)
+    assert n == 41 and phase.t[0] == 0.0 and phase.t[-1] == pytest.approx(0.1, abs=1e-15)
+    for name, shape in (("x", (n, nx)), ("xd", (n, nx)), ("xdd", (n, nx)), ("torques", (n, na)),
+                        ("contact_forces", (n, 2, 3)), ("held_impact_impulses", (2, 3)), ("peak_torque", (na,)),
+                        ("i_minus", (na,)), ("i_plus", (na,)), ("next_start_velocity", (len(plan.joint_names),))):
+        assert np.size(getattr(phase, name)) == math.prod(shape), name
+    torques = np.reshape(phase.torques, (n, na))
+    limit = planner.lasting.limit(default_gait)  # E(0+), a tenth of a second in this process
+    # the same program from the same start in two processes (IPOPT's tolerance moves E(0+) by less than 1e-6)
+    assert phase.effort_impulsive_limit == pytest.approx(limit.effort_total, abs=1e-6)
+    assert phase.effort_total > phase.effort_impulsive_limit > plan.effort_cost == pytest.approx(default_gait.W, rel=1e-12)
+    assert phase.effort_total == pytest.approx(np.abs(phase.i_minus).sum() + np.abs(phase.i_plus).sum()
+                                               + phase.effort_l1, rel=1e-12)
+    assert np.abs(torques).max() <= 200.0 + TORQUE_TOLERANCE
+    assert np.array_equal(np.abs(torques).max(axis=0), phase.peak_torque)
+    weight = planner.model.total_mass * planner.params.gravity
+    assert np.reshape(phase.contact_forces, (n, 2, 3))[..., 2].min() > -1e-6 * weight  # both feet press
+    again = ros.call(ros.client, plan_request(double_support=0.1))
+    assert again.message == response.message + " (cached)"
+    assert list(again.plan.double_support_phase.torques) == list(phase.torques)
+
+    # The recording: finished by turning it off (then on again), read by rosbags and mcap-ros2.
+    setter = ros.node.create_client(SetParameters, "/biped_gait_planner/set_parameters")
+    ros.connect(setter)
+    for on in (False, True):
+        new = ParameterMsg(name="record", value=ParameterValue(type=ParameterType.PARAMETER_BOOL, bool_value=on))
+        assert ros.call(setter, SetParameters.Request(parameters=[new])).results[0].successful
+    ros.node.destroy_client(setter)
+    first = min((node_dir / "bags").iterdir())
+    with AnyReader([first]) as reader:
+        recorded = {c.topic: [reader.deserialize(raw, c.msgtype) for _, _, raw in reader.messages(connections=[c])]
+                    for c in reader.connections}
+    [call] = [c for c in recorded[SERVICE + "/calls"] if c.double_support == 0.1 and not c.message.endswith("(cached)")]
+    [published] = [p for p in recorded[TOPIC] if p.double_support_phase.duration == 0.1]
+    for got in (call.plan.double_support_phase, published.double_support_phase):
+        assert np.array_equal(got.torques, phase.torques) and np.array_equal(got.contact_forces, phase.contact_forces)
+        assert got.effort_total == phase.effort_total and got.message == phase.message
+    [mcap_path] = list(first.glob("*.mcap"))
+    decoded = [m.ros_msg for m in read_ros2_messages(str(mcap_path), topics=[TOPIC])
+               if m.ros_msg.double_support_phase.duration == 0.1]
+    assert len(decoded) == 1 and list(decoded[0].double_support_phase.x) == list(phase.x)
+
+
+def test_a_bad_lasting_double_support_is_refused_and_the_node_serves_on(ros):
+    """A duration that is none, a stride on a circle, the hips' set (the lasting planner is
+    written for legs of pitch joints): success false, one line, the next request answered."""
+    for request, message in [
+        (plan_request(double_support=-0.1), "double_support must be a duration >= 0 s, got -0.1"),
+        (plan_request(double_support=math.nan), "double_support must be a duration >= 0 s, got nan"),
+        (plan_request(double_support=math.inf), "double_support must be a duration >= 0 s, got inf"),
+        (plan_request(params="aoustin2013-hips", turn_radius=2.5, double_support=0.1), "straight gaits only"),
+        (plan_request(period=0.5, arm_amplitude=math.radians(20.0), params="aoustin2013-hips", step_width=0.35,
+                      double_support=0.1), "pitch joints only"),
+    ]:
+        response = ros.call(ros.client, request, timeout=120.0)
+        assert not response.success and message in response.message, response.message
+        assert "\n" not in response.message
+    assert ros.call(ros.client, plan_request(arm_amplitude=0.3)).success
 
 
 def test_diagnostics_count_the_requests(ros):

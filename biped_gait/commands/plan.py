@@ -10,8 +10,8 @@ from pathlib import Path
 
 from ..arguments import check_output_folder, request_fields
 from ..core.gait import views
-from ..core.gait.lasting import LastingRequest, LastingSupport
-from ..core.gait.planner import GaitPlanner, GaitRequest
+from ..core.gait.lasting import LastingSupport
+from ..core.gait.planner import GaitPlanner, GaitRequest, lasting_request
 from .output import check_json, write_json
 
 JSON_NAME = "plan.json"
@@ -24,9 +24,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_folder(args.out, "--out", force=True)
     fields = request_fields(args, exclude=("params",))
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
-    lasting = LastingRequest(args.double_support, request.effort) if args.double_support else None
-    if lasting is not None and math.isfinite(request.turn_radius):
-        raise ValueError("--double-support: a lasting double support is planned for straight gaits only")
+    lasting = lasting_request(request, args.double_support)
     planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
         gait = planner.plan_stride(request)
@@ -38,8 +36,7 @@ def run(args: argparse.Namespace) -> int:
         result, drawn = views.to_dict(gait), gait
     admissible = gait.admissible
     if lasting is not None and gait.usable:
-        limit = planner.lasting.limit(gait, lasting.effort)
-        support = planner.lasting.periodic(gait, lasting, limit=limit)
+        support, limit = planner.lasting_cycle(gait, lasting)
         print(lasting_summary(support, limit.effort_total, gait.W))
         result["double_support_phase"] = views.double_support_phase(support, limit.effort_total)
         admissible = admissible and support.success

@@ -13,7 +13,7 @@ from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import Vector3
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from biped_gait_interfaces.msg import GaitPlan
+from biped_gait_interfaces.msg import DoubleSupportPhase, GaitPlan
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.gait.configurations import GaitMode
@@ -117,6 +117,26 @@ def plan_msg(gait: Gait, header, joints: UrdfJoints) -> GaitPlan:
         setattr(msg, f.msg, value)
     msg.trajectory.header = header
     msg.stride_effort = gait.W
+    return msg
+
+
+# The plan JSON's double_support_phase keys that DoubleSupportPhase spells otherwise (the others: the same).
+PHASE_NAMES = {"X": "x", "Xd": "xd", "Xdd": "xdd", "solve_time_s": "solve_time"}
+
+
+def phase_msg(phase: dict) -> DoubleSupportPhase:
+    """The DoubleSupportPhase message of a plan JSON's ``double_support_phase``
+    (``views.double_support_phase``): the same figures, arrays flattened row by row, JSON's null
+    NaN again (an empty array where there is none, ``next_start_velocity``)."""
+    msg = DoubleSupportPhase()
+    types = DoubleSupportPhase.get_fields_and_field_types()
+    for key, value in phase.items():
+        name = PHASE_NAMES.get(key, key)
+        if types[name].startswith("sequence"):
+            value = [] if value is None else np.asarray(value, dtype=float).ravel().tolist()
+        elif value is None:
+            value = math.nan
+        setattr(msg, name, value)
     return msg
 
 

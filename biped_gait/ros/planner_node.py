@@ -1,6 +1,8 @@
 """The gait-planner node (entry point ``biped-gait-planner``).
 
-- service ``~/plan_gait`` (biped_gait_interfaces/srv/PlanGait): plan one gait;
+- service ``~/plan_gait`` (biped_gait_interfaces/srv/PlanGait): plan one gait; with
+  ``double_support`` > 0, its periodic cycle with a double support that lasts (an IPOPT solve of
+  seconds to minutes, on a thread of its own: the node serves the rest meanwhile);
 - action ``~/optimize_arm_swing`` (biped_gait_interfaces/action/OptimizeArmSwing): the arm
   amplitude of least effort, with feedback per amplitude evaluated; cancelable;
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
@@ -32,7 +34,8 @@ import copy
 import math
 import threading
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 
@@ -45,6 +48,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.qos import QoSProfile
+from rclpy.task import Future
 from std_msgs.msg import Header
 from trajectory_msgs.msg import JointTrajectory
 
@@ -53,14 +57,16 @@ from biped_gait_interfaces.msg import GaitPlan, PlanGaitCall
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_param_names
-from ..core.gait.planner import SEED, GaitPlanner, GaitRequest
+from ..core.gait import views
+from ..core.gait.planner import SEED, GaitPlanner, GaitRequest, lasting_request
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.text import clip
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..core.gait.arm_optimum import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
-from .conversions import OPTION_NAMES, POINT_NAMES, gait_fields, plan_msg, request_key, stride_msgs, urdf_joints
+from .conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, phase_msg, plan_msg, request_key, stride_msgs,
+                          urdf_joints)
 from .diagnostics import OK, WARN, Counters, Diagnostics, Report
 from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .parameters import Param, declare
@@ -71,7 +77,7 @@ from .recorded import RecordedPublisher, finish_recording
 NODE_NAME = "biped_gait_planner"
 PLAN_FRAME = "stance_foot"  # plans are expressed with the stance tip at the origin
 GOAL_NAMES = ("step_length", "period", "alpha_min", "alpha_max", "alpha_step")  # a goal's fields beyond the options
-CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms)
+CLOSE_WAIT = 1.0  # s that closing waits for a callback in flight (a solve takes tens of ms; a lasting one is not waited for)
 GROUPS = ("service", "action")  # who owns a planner: the service's callbacks, the action's
 PARAMETERS = (
     Param("default_params", DEFAULT_PARAMS, "parameter set used when a request names none: "
@@ -130,6 +136,16 @@ class InFlight:
             self._count -= 1
             self._idle.notify_all()
 
+    @contextmanager
+    def aside(self) -> Iterator[None]:
+        """Not counted inside: a callback awaiting another thread's work uses no handle, and
+        closing need not wait for that work (a lasting solve: seconds)."""
+        self.__exit__()
+        try:
+            yield
+        finally:
+            self.__enter__()
+
     def wait_idle(self, timeout: float) -> bool:
         """Wait up to ``timeout`` s for no callback to run; False if one still does."""
         with self._idle:
@@ -175,7 +191,8 @@ class GaitPlannerNode(Node):
         self._service_group = MutuallyExclusiveCallbackGroup()
         self._action_group = MutuallyExclusiveCallbackGroup()
         # The service's callbacks run in the spinning thread (a cached answer at once; a solve,
-        # tens of ms, there too), the action's on the executor's pool.
+        # tens of ms, there too; a lasting double support's seconds on a thread of their own,
+        # ``_lasting``), the action's on the executor's pool.
         self.inline_callback_groups = (self._service_group,)
         queue = QoSProfile(depth=value["queue_depth"])  # reliable, volatile, like the services' default
         self.plan_service = self.create_service(
@@ -278,17 +295,17 @@ class GaitPlannerNode(Node):
     def _header(self) -> Header:
         return Header(stamp=self.get_clock().now().to_msg(), frame_id=PLAN_FRAME)
 
-    def _on_plan_gait(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+    async def _on_plan_gait(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
         if self._closing.is_set():
             response.success, response.message = False, "the planner is stopping"
             return response
         with self._in_flight:
-            return self._serve(request, response)
+            return await self._serve(request, response)
 
-    def _serve(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
+    async def _serve(self, request: PlanGait.Request, response: PlanGait.Response) -> PlanGait.Response:
         self.stats.count("requests")
         try:
-            self._answer(request, response)
+            await self._answer(request, response)
         except ValueError as exc:
             response.success, response.message = False, str(exc)
         except Exception as exc:  # noqa: BLE001  a solver failure must not take the node down
@@ -300,12 +317,13 @@ class GaitPlannerNode(Node):
         self._record_call(request, response)
         return response
 
-    def _answer(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
+    async def _answer(self, request: PlanGait.Request, response: PlanGait.Response) -> None:
         """Answer from the cache (the first answer's success and message, marked cached), else
         plan: ``success`` only for an admissible gait; otherwise the reasons (a gait that misses
-        only the margins says so) and, when the atlas knows, where the nearest admissible gaits are."""
+        only the margins says so) and, when the atlas knows, where the nearest admissible gaits are.
+        With ``double_support`` > 0, the gait's cycle with that double support too (``_lasting``)."""
         fields = self._fields(request, (*POINT_NAMES, *OPTION_NAMES))
-        key = request_key(fields)
+        key = request_key({**fields, "double_support": request.double_support})
         cached = self._cached(self._cache, key)
         if cached is not None:
             self.stats.count("cache_hits")
@@ -315,6 +333,7 @@ class GaitPlannerNode(Node):
             response.message = f"{cached.message} (cached)"
             return
         core_request = GaitRequest(**fields)
+        lasting = lasting_request(core_request, request.double_support)
         planner = self._planner(core_request.params, "service")
         joints = urdf_joints(planner.model)
         if math.isfinite(core_request.turn_radius):
@@ -323,21 +342,50 @@ class GaitPlannerNode(Node):
         else:
             gait = planner.plan(core_request)
             plan, next_steps = plan_msg(gait, self._header(), joints), []
-        self.stats.count("solves")
-        self.stats.time(gait.solve_time_s)
+        solve_time = gait.solve_time_s
         response.success = gait.admissible
         if gait.admissible:
             response.message = f"admissible (found by {gait.found})"
         else:
             reasons = "not admissible: " + "; ".join(gait.reasons)
             response.message = f"{reasons}; {gait.hint}" if gait.hint else reasons
+        if lasting is not None and gait.usable:
+            support, limit = await self._lasting(lambda: planner.lasting_cycle(gait, lasting))
+            plan.double_support_phase = phase_msg(views.double_support_phase(support, limit.effort_total))
+            solve_time += limit.solve_time_s + support.solve_time_s
+            response.success = response.success and support.success
+            said = (f"double support of {support.duration:g} s: E = {support.effort_total:.3f} N m s "
+                    f"(E(0+) = {limit.effort_total:.3f})" if support.success else support.message)
+            response.message = f"{response.message}; {said}"
+        self.stats.count("solves")
+        self.stats.time(solve_time)
         answer = CachedAnswer(response.success, response.message, plan, without_trajectory(plan), tuple(next_steps),
                               tuple(without_trajectory(p) for p in next_steps))
         response.plan = answer.compact if request.omit_trajectory else plan
         response.next_steps = list(answer.next_compact if request.omit_trajectory else answer.next_steps)
         self._keep(self._cache, key, answer)
-        if gait.admissible:
+        if response.success:
             self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
+
+    async def _lasting(self, solve: Callable[[], tuple]) -> tuple:
+        """``solve()`` (a lasting double support: seconds of IPOPT) on a thread of its own, awaited:
+        the spinning thread serves the rest meanwhile (the action, /diagnostics, parameters, a
+        stop), the service's callback group held, so that its planner stays one thread's and the
+        next requests wait in the queue."""
+        done = Future()
+
+        def run() -> None:
+            try:
+                done.set_result(solve())
+            except Exception as exc:  # noqa: BLE001  raised again where it is awaited
+                done.set_exception(exc)
+            executor = self.executor
+            if executor is not None:
+                executor.wake()  # resume the awaiting callback now, not at the next spin's timeout
+
+        threading.Thread(target=run, name="lasting_double_support", daemon=True).start()
+        with self._in_flight.aside():
+            return await done
 
     def _cached(self, cache: OrderedDict, key: tuple):
         """The answer ``cache`` keeps for ``key`` (made its most recent), or None."""
@@ -392,6 +440,7 @@ class GaitPlannerNode(Node):
         self.stats.count("optimizations")
         try:
             fields = self._fields(goal, (*GOAL_NAMES, *OPTION_NAMES))
+            check_instantaneous(goal.double_support)
         except ValueError as exc:
             return self._refuse_goal(goal_handle, OptimizeArmSwing.Result(message=clip(str(exc))))
         key = request_key(fields)
@@ -490,6 +539,16 @@ def check_goal(step_length: float, period: float, alpha_min: float, alpha_max: f
                          f"[{alpha_min:g}, {alpha_max:g}] rad")
     if not alpha_step > 0:
         raise ValueError(f"alpha_step must be positive, got {alpha_step:g} rad")
+
+
+def check_instantaneous(double_support: float) -> None:
+    """``ValueError`` (one line) for a goal whose double support is not the paper's instantaneous
+    one: the search plans 30 and more gaits, and the cycle of each with a double support that lasts
+    is an IPOPT solve of seconds to minutes (docs/ros.md)."""
+    if double_support != 0.0:
+        raise ValueError(f"double_support {double_support:g} s: the arm swing is optimized with the paper's "
+                         "instantaneous double support only (0): with one that lasts, each of the 30 and more "
+                         "gaits searched is a solve of seconds to minutes (plan_gait plans one)")
 
 
 def main(args: list[str] | None = None) -> int:

@@ -44,7 +44,7 @@ from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
-    from .lasting import LastingPlanner
+    from .lasting import LastingPlanner, LastingRequest, LastingSupport
     from .turning_atlas import TurningAtlas
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
@@ -183,6 +183,20 @@ def validate_step_width(step_width: float, params: BipedParams) -> float:
     return width
 
 
+def lasting_request(request: GaitRequest, duration: float) -> "LastingRequest | None":
+    """The double support of ``duration`` s asked beside ``request`` (with its effort), or None for
+    0 (the paper's instantaneous double support); ``ValueError`` (one line) for a duration that is
+    none (negative, NaN, inf) or beside a stride on a circle (planned for straight gaits only)."""
+    if duration == 0.0:
+        return None
+    from .lasting import LastingRequest  # CasADi's import only when a lasting double support is asked
+
+    lasting = LastingRequest(duration, request.effort)
+    if math.isfinite(request.turn_radius):
+        raise ValueError("double_support: a lasting double support is planned for straight gaits only")
+    return lasting
+
+
 class GaitPlanner:
     """Plans gaits for one parameter set; keeps its Pinocchio models, hybrid step and flows, and
     its atlases (loaded when it is made, so that its first plan costs what the next ones do).
@@ -235,6 +249,14 @@ class GaitPlanner:
         from .lasting import LastingPlanner
 
         return LastingPlanner(self.model, self.hybrid.exchange, self.flow, self.params.friction)
+
+    def lasting_cycle(self, gait: Gait, request: "LastingRequest") -> tuple["LastingSupport", "LastingSupport"]:
+        """``gait``'s periodic cycle with a double support of ``request.duration`` s and its
+        impulsive limit d -> 0+ (the cycle's seed; its ``effort_total`` is E(0+)), what the ``plan``
+        verb and the planner node answer; ``ValueError`` for a parameter set the lasting planner is
+        not written for (lateral hip joints)."""
+        limit = self.lasting.limit(gait, request.effort)
+        return self.lasting.periodic(gait, request, limit=limit), limit
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
         """The current atlas of these parameters and ``mode`` (loaded when the planner is made,
