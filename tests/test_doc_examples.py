@@ -58,6 +58,8 @@ NOT_RUN = {
     "-p steps:=0 -p live_view:=true": UNTIL_STOPPED,
     ".venv/bin/biped-gait-simulator --ros-args -p steps:=10 -p arm_amplitude:=0.35 -p friction_margin:=0.05": UNTIL_STOPPED,
     ".venv/bin/biped-gait-simulator --ros-args -p steps:=20 -p pushes:=4 0.5 0.5 0 0; 9 0.5 0 -1.0 0": UNTIL_STOPPED,
+    ".venv/bin/biped-gait-simulator --ros-args -p double_support:=0.1":
+        UNTIL_STOPPED + "; test_simulator_lasting.py walks it 20 steps",
     ".venv/bin/biped-gait sweep --step-length 0.40 0.45 0.50 --mode normal anti-normal --out sweep-results":
         "a study of minutes: test_sweep.py runs sweeps on fewer gaits",
     ".venv/bin/biped-gait maps --out maps": "a study of minutes: test_study_cli.py runs maps on a coarser grid",

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from ..arguments import check_output_folder, request_fields
 from ..core.gait import views
-from ..core.gait.lasting import LastingSupport
+from ..core.gait.lasting_support import LastingSupport
 from ..core.gait.planner import GaitPlanner, GaitRequest, lasting_request
 from .output import check_json, write_json
 

@@ -19,6 +19,7 @@ from biped_gait_interfaces.srv import PlanGait
 from ..core.gait.configurations import GaitMode
 from ..gait_options import OPTIONS, POINT, resolve_unset
 from ..core.gait.gait import Gait, Stride
+from ..core.gait.lasting_support import LastingSupport
 from ..core.gait.views import FIELDS
 from ..core.dynamics.impulses import EffortOptions
 from ..core.gait.planner import GaitRequest
@@ -138,6 +139,29 @@ def phase_msg(phase: dict) -> DoubleSupportPhase:
             value = math.nan
         setattr(msg, name, value)
     return msg
+
+
+def lasting_support_from_msg(plan: GaitPlan) -> LastingSupport | None:
+    """What a walk needs of a GaitPlan's double support that lasts (``phase_msg``'s inverse, its
+    arrays in their shapes again: ``double_support_coordinates`` and ``actuated_joints`` give
+    them); None for the paper's instantaneous one (duration 0)."""
+    msg = plan.double_support_phase
+    if msg.duration == 0.0:
+        return None
+    nx, na = len(plan.double_support_coordinates), len(plan.actuated_joints)
+
+    def rows(values, *shape) -> np.ndarray:
+        return np.asarray(values, dtype=float).reshape(-1, *shape)
+
+    return LastingSupport(
+        duration=msg.duration, success=msg.success, message=msg.message, t=np.asarray(msg.t, dtype=float),
+        x=rows(msg.x, nx), xd=rows(msg.xd, nx), xdd=rows(msg.xdd, nx), torques=rows(msg.torques, na),
+        contact_forces=rows(msg.contact_forces, 2, 3), i_minus=np.asarray(msg.i_minus, dtype=float),
+        i_plus=np.asarray(msg.i_plus, dtype=float), held_impact_impulses=rows(msg.held_impact_impulses, 3),
+        effort_l1=msg.effort_l1, effort_l2=msg.effort_l2, effort_total=msg.effort_total,
+        iterations=msg.iterations, solve_time_s=msg.solve_time,
+        next_start_velocity=np.asarray(msg.next_start_velocity, dtype=float),
+        push_off=np.asarray(msg.push_off, dtype=float) if len(msg.push_off) else None)
 
 
 def stride_msgs(stride: Stride, header, joints: UrdfJoints) -> tuple[GaitPlan, list[GaitPlan]]:

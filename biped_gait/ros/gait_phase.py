@@ -40,9 +40,12 @@ class GaitPhases:
             self._publish(phase, step, t, start_ns)
 
     def touchdown(self, step: int, t: float, start_ns: int) -> None:
-        """``step`` ends at ``t`` (s in the walk) with the double support."""
-        self._phase = (step, GaitPhase.DOUBLE_STANCE)
-        self._publish(GaitPhase.DOUBLE_STANCE, step, t, start_ns)
+        """``step`` ends at ``t`` (s in the walk) with the double support: it begins then (the
+        paper's, instantaneous), unless its samples began it already (one that lasts, whose
+        touchdown event comes at its lift-off)."""
+        if self._phase != (step, GaitPhase.DOUBLE_STANCE):
+            self._phase = (step, GaitPhase.DOUBLE_STANCE)
+            self._publish(GaitPhase.DOUBLE_STANCE, step, t, start_ns)
 
     def _publish(self, phase: int, step: int, t: float, start_ns: int) -> None:
         stamp_ns = start_ns + round(t * 1e9)

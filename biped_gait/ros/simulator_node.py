@@ -92,6 +92,8 @@ from ..core.gait.configurations import GaitMode
 from ..core.gait.planner import GaitRequest, validate_request
 from ..gait_options import OPTIONS, POINT, GaitOption, resolve_unset
 from ..core.walking.pacing import Pacer
+from ..core.dynamics.hybrid import HybridStep
+from ..core.model.biped import BipedModel
 from ..core.model.params import load_params, names_set, shipped_param_names
 from ..core.walking.push import AppliedPush
 from ..core.dynamics.settings import DEFAULTS
@@ -99,6 +101,7 @@ from ..core.walking.steering import DEFAULT_RATE
 from ..core.model.text import clip
 from ..core.walking.transitions import MAX_CHANGE, MAX_CURVATURE, MAX_CURVATURE_CHANGE, SPEED_RULES
 from ..core.walking.events import CouldNotStart, Fell, Finished, StepSamples, Touchdown
+from ..core.walking.held_support import lasting_orbit
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.runner import prepare_walking
 from ..core.walking.walk import ENGINES, INITIAL_STATES, PULSE_DURATION, Walk, check_initial_state
@@ -106,7 +109,7 @@ from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
 from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError, SampleRows
-from .conversions import MODE_TO_MSG, orbit_from_msg
+from .conversions import MODE_TO_MSG, lasting_support_from_msg, orbit_from_msg
 from .diagnostics import ERROR, OK, WARN, Counters, Diagnostics, Report
 from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .gait_phase import GaitPhases
@@ -123,6 +126,7 @@ from .walk_messages import SampleMessages, event_msg, stamp_msg, tf_msg
 
 NODE_NAME = "biped_gait_simulator"
 LOG_PERIOD = 5.0  # s between the log lines of a long wait
+LASTING_PATIENCE = 600.0  # s: the longest wait for a plan with a double support that lasts (the study's slowest: 138 s)
 RECORD_EVERY = 16  # samples published between two hand-overs to the recorder (a kill loses them at most)
 
 
@@ -154,6 +158,11 @@ PARAMETERS = (
     Param("engine", ENGINES[0], "what integrates the walk: 'hybrid' (the planner's model, impulsive double "
           "supports) or 'mujoco' (MuJoCo on the exported stance tree, the double support as torque pulses of "
           "pulse_duration; the walker's re-aim the feedback)", choices=ENGINES),
+    Param("double_support", 0.0, "the double support's duration d (s): 0 the paper's instantaneous one; > 0 one that "
+          "lasts, both feet down for d s between the paper's two impulses, planned by the planner (an IPOPT solve: "
+          "tens of seconds before the walk starts) and tracked by the walk (docs/model.md section 14.1). With "
+          "engine 'hybrid' and the duration re-aim (recovery is taken as 'duration'); gaits that /cmd_vel picks "
+          "are walked with the paper's double support", 0.0, 1.0),
     Param("pulse_duration", PULSE_DURATION, "with engine 'mujoco': the double support's duration d (s), its "
           "impulses spread into torques over d / 2 before and after the touchdown", 1e-4, 0.1),
     Param("reaim", True, "re-solve each step from the actual state, the open-loop gait being unstable (true/false)"),
@@ -215,6 +224,9 @@ class SimulatorNode(Node):
         self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
         check_initial_state(value["initial_state"], value["engine"])
+        if value["double_support"] > 0.0 and value["engine"] != "hybrid":
+            raise ValueError(f"double_support {value['double_support']:g} s needs engine 'hybrid': MuJoCo's floor holds "
+                             "the feet sideways, which the plan's closed chain leaves free (docs/model.md section 14.1)")
         prepare_walking()  # what the walk loads once, now rather than when it starts
         gait = {name: value[name] for name in GAIT_NAMES}
         try:
@@ -397,8 +409,11 @@ class SimulatorNode(Node):
             alpha = result.alpha_opt
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
         # the walk needs the plan's boundary states, not its sampled trajectory
-        request = PlanGait.Request(arm_amplitude=alpha, mode=mode, omit_trajectory=True, **options)
-        response = self._call_plan(request)
+        request = PlanGait.Request(arm_amplitude=alpha, mode=mode, omit_trajectory=True,
+                                   double_support=value["double_support"], **options)
+        # A double support that lasts is an IPOPT solve of tens of seconds (docs/ros.md): waited for once.
+        response = (self._call_plan(request, attempts=1, patience=LASTING_PATIENCE) if value["double_support"] > 0.0
+                    else self._call_plan(request))
         if not response.success:
             raise NoPlan(f"the planner refused: {response.message}")
         return [response.plan, *response.next_steps]
@@ -506,6 +521,9 @@ class SimulatorNode(Node):
             self._not_started(str(exc))
             return
         orbit = tuple(replace(orbit_from_msg(plan), params=params) for plan in plans)
+        support = lasting_support_from_msg(plans[0])
+        if support is not None:  # the orbit walked with its double support that lasts, tracked
+            orbit = (lasting_orbit(orbit[0], support, HybridStep(BipedModel.from_params(load_params(params or None)))),)
         start_ns = self.get_clock().now().nanoseconds
         pacer = Pacer(self.rtf)
         plan = plans[0]
@@ -540,7 +558,7 @@ class SimulatorNode(Node):
         ``start_ns`` (ns); True if it ended (finished or fell, or could not start), False if
         it was stopped or reset."""
         held = time.monotonic()
-        steer = self.value["reaim"] and self.value["recovery"] == "momentum"
+        steer = self.value["reaim"] and self.value["recovery"] == "momentum" and orbit[0].double_support is None
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
                     momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step,
                     engine=self.value["engine"], pulse_duration=self.value["pulse_duration"],

@@ -58,6 +58,7 @@ from ..dynamics.impulses import pyramid
 from ..dynamics.symbolic import SymbolicModel
 from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
 from .flow_function import CoupledConstraints, FlowFunction
+from .lasting_support import IMPULSE_TIME, LastingSupport
 
 # Hermite-Simpson intervals over d (2 n + 1 collocation points, nodes and midpoints), by kind. The
 # stop and the start (a second or so) on 10: on 20 IPOPT did not finish either at d = 1 s (1,000
@@ -69,9 +70,7 @@ MAX_ITERATIONS = 1000  # the solves that converge take 200 to 600
 TORQUE = 100.0  # N m
 JOINT_IMPULSE = 10.0  # N m s
 ACCELERATION = 10.0  # rad/s^2
-IMPULSE_TIME = 0.1  # s: a reaction impulse's scale is the weight over this long
 CORRECTION = 1e-6  # m, m/s: the collocation defects' corrections along the held rows (the rule's error)
-NEGLIGIBLE = 1e-7  # of a reaction's scale: below it a reaction is the solver's tolerance, not a force
 KINDS = ("periodic", "stop", "start", "limit")
 # The margins a walked plan keeps (``LastingRequest.walkable``). Without them the least-effort plan
 # rides its constraints (a foot's normal force down to 0, the friction used 0.49 of 0.5, the old foot
@@ -132,57 +131,6 @@ class Boundary:
     xd_a: np.ndarray
     q_rest: np.ndarray
     period: float
-
-
-@dataclass(frozen=True, eq=False)
-class LastingSupport:
-    """A solved (or refused) double support of ``duration`` seconds. Samples at every collocation
-    point (nodes and midpoints, 2 n + 1 instants from 0 to d, both included, n its ``INTERVALS``): ``t`` (s),
-    ``x``, ``xd``, ``xdd`` in the double-support coordinates X, ``torques`` (N m, actuated joints),
-    ``contact_forces`` (old and new stance tip, world axes, N, n x 2 x 3). The impulses: ``i_minus``,
-    ``i_plus`` (N m s), ``held_impact_impulses`` (old and new tip, N s, 2 x 3). Efforts (N m s):
-    ``effort_l1`` and ``effort_l2`` of the torques over the phase, ``effort_total`` the minimized
-    E's l1 reading (impulses and torques)."""
-
-    duration: float
-    success: bool
-    message: str
-    t: np.ndarray
-    x: np.ndarray
-    xd: np.ndarray
-    xdd: np.ndarray
-    torques: np.ndarray
-    contact_forces: np.ndarray
-    i_minus: np.ndarray
-    i_plus: np.ndarray
-    held_impact_impulses: np.ndarray
-    effort_l1: float
-    effort_l2: float
-    effort_total: float
-    iterations: int
-    solve_time_s: float
-    next_start_velocity: np.ndarray | None = None  # periodic: the next step's qd(0) (its own coordinates, rad/s)
-    push_off: np.ndarray | None = None  # periodic: the old tip's reaction impulse at I^+ (N s, world axes of the step's model)
-    solution: dict | None = None  # the program's unknowns and multipliers, to warm-start a nearby solve
-
-    @property
-    def peak_torque(self) -> np.ndarray:
-        """The largest |Gamma_j| over the phase, per actuated joint (N m)."""
-        return np.abs(self.torques).max(axis=0) if len(self.torques) else np.zeros(self.i_minus.shape)
-
-    @property
-    def friction_used(self) -> float:
-        """The largest |F_xy| / F_z of both tips over the phase and of the held impact's impulses;
-        a reaction within the solver's tolerance of zero (``NEGLIGIBLE`` of the phase's largest
-        normal force, or of its impulse over 0.1 s) needs none: its direction is rounding's."""
-        largest = float(np.max(np.abs(self.contact_forces[..., 2]), initial=0.0)) or 1.0
-        ratios = [0.0]
-        for forces, floor in ((self.contact_forces.reshape(-1, 3), NEGLIGIBLE * largest),
-                              (self.held_impact_impulses, NEGLIGIBLE * largest * IMPULSE_TIME)):
-            for f in forces:
-                if np.linalg.norm(f) > floor:
-                    ratios.append(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else math.inf)
-        return float(max(ratios))
 
 
 class _Program:

@@ -44,7 +44,8 @@ from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
-    from .lasting import LastingPlanner, LastingRequest, LastingSupport
+    from .lasting import LastingPlanner, LastingRequest
+    from .lasting_support import LastingSupport
     from .turning_atlas import TurningAtlas
 
 SEED = (0.45, 0.45, math.radians(23.5))  # (L m, T s, alpha rad): the straight-line start finds the human-like gait
@@ -184,14 +185,16 @@ def validate_step_width(step_width: float, params: BipedParams) -> float:
 
 
 def lasting_request(request: GaitRequest, duration: float) -> "LastingRequest | None":
-    """The double support of ``duration`` s asked beside ``request`` (with its effort), or None for
-    0 (the paper's instantaneous double support); ``ValueError`` (one line) for a duration that is
-    none (negative, NaN, inf) or beside a stride on a circle (planned for straight gaits only)."""
+    """The double support of ``duration`` s asked beside ``request`` (with its effort and the
+    margins a walk tracking it needs, ``LastingRequest.walkable``: the plan served is the one the
+    simulator walks), or None for 0 (the paper's instantaneous double support); ``ValueError`` (one
+    line) for a duration that is none (negative, NaN, inf) or beside a stride on a circle (planned
+    for straight gaits only)."""
     if duration == 0.0:
         return None
     from .lasting import LastingRequest  # CasADi's import only when a lasting double support is asked
 
-    lasting = LastingRequest(duration, request.effort)
+    lasting = LastingRequest.walkable(duration, request.effort)
     if math.isfinite(request.turn_radius):
         raise ValueError("double_support: a lasting double support is planned for straight gaits only")
     return lasting

@@ -188,7 +188,7 @@ def to_dict(gait: Gait, trajectory: bool = True) -> dict:
 
 
 def double_support_phase(support, limit_effort: float) -> dict:
-    """A double support that lasts (``lasting.LastingSupport``) as the plan's JSON has it, in the
+    """A double support that lasts (``lasting_support.LastingSupport``) as the plan's JSON has it, in the
     plan's ``double_support_coordinates`` and ``actuated_joints``; ``limit_effort`` E(0+) (N m s)."""
     return clean({
         "duration": support.duration, "success": support.success, "message": support.message,
@@ -197,7 +197,7 @@ def double_support_phase(support, limit_effort: float) -> dict:
         "peak_torque": support.peak_torque, "friction_used": support.friction_used, "i_minus": support.i_minus,
         "i_plus": support.i_plus, "held_impact_impulses": support.held_impact_impulses,
         "effort_total": support.effort_total, "effort_impulsive_limit": limit_effort,
-        "next_start_velocity": support.next_start_velocity, "iterations": support.iterations,
+        "next_start_velocity": support.next_start_velocity, "push_off": support.push_off, "iterations": support.iterations,
         "solve_time_s": support.solve_time_s})
 
 

@@ -103,7 +103,7 @@ def held_support(chain: ClosedChain, support) -> HeldSupport:
 
 def lasting_orbit(orbit: PlannedOrbit, support, hybrid: HybridStep, settings: Settings = DEFAULTS) -> PlannedOrbit:
     """The gait of ``orbit`` (its d = 0 plan) walked with the planned double support ``support``
-    (d > 0; ``lasting.LastingSupport``, or anything with its fields): its single support from the
+    (d > 0; ``lasting_support.LastingSupport``, or anything with its fields): its single support from the
     lift-off posture (the legs exchanged) with the next step's start velocity, flown on the walk's
     grid (``settings.walk_steps``) for T to the touchdown posture q_T; the double support to track
     at its end."""
