@@ -23,7 +23,7 @@ from ..core.gait.planner import GaitPlanner, GaitRequest
 
 DURATIONS = (0.05, 0.1, 0.15, 0.2, 0.3)
 ALPHAS_DEG = (0.0, 7.5, 15.0, 22.5, 30.0, 37.5, 45.0)
-ALPHA_DURATIONS = (0.1,)
+ALPHA_DURATIONS = (0.05, 0.1, 0.2)
 
 
 def _row(planner: GaitPlanner, request: GaitRequest, duration: float) -> dict:
