@@ -68,14 +68,23 @@ def signal_and_time(proc: subprocess.Popen, sig: int) -> tuple[int, float]:
 
 def batches(tmp_path: Path, start, size: int = BATCH) -> Iterator[list[tuple[Path, object]]]:
     """``ROUNDS`` rounds in batches of ``size``: each round a folder of its own and what
-    ``start(folder)`` returns for it."""
+    ``start(folder)`` returns for it (a process, or a (name, process) pair). A batch whose test
+    fails has its processes still running killed, so that they do not walk on into the next
+    tests of this worker's ROS domain."""
     for first in range(0, ROUNDS, size):
         rounds = []
-        for i in range(first, min(first + size, ROUNDS)):
-            where = tmp_path / f"round{i}"
-            where.mkdir()
-            rounds.append((where, start(where)))
-        yield rounds
+        try:
+            for i in range(first, min(first + size, ROUNDS)):
+                where = tmp_path / f"round{i}"
+                where.mkdir()
+                rounds.append((where, start(where)))
+            yield rounds
+        finally:
+            for _, started in rounds:
+                proc = started[1] if isinstance(started, tuple) else started
+                if proc.poll() is None:
+                    proc.kill()
+                    proc.wait(timeout=30)
 
 
 def wait_for(condition, timeout: float, what: str) -> None:
