@@ -113,8 +113,8 @@ def pulse_row(orbit: PlannedOrbit, duration: float) -> PulseRow:
     twins = [np.concatenate([r.q_predicted, r.qd_predicted]) for r in shoved.records]
     gaps = [float(np.max(np.abs(a - b))) for a, b in zip(states[SHOVE_AT:], twins[SHOVE_AT:])]
     contraction = (gaps[-1] / gaps[0]) ** (1.0 / (len(gaps) - 1)) if len(gaps) > 1 and gaps[0] > 0 else math.nan
-    last, q_t, qd_b = records[-1], orbit.q_t, orbit.qd_b
-    error = max(float(np.max(np.abs(last.q_predicted - q_t))), float(np.max(np.abs(last.qd_predicted - qd_b))))
+    last = records[-1]
+    error = orbit.touchdown_error(last.q_predicted, last.qd_predicted)
     return PulseRow(duration, len(records), "", last.effort, last.impulsive_effort,
                     max(r.friction_planned for r in records), walked.friction_used,
                     max(r.peak_torque for r in records), records[-1].t - records[-2].t if len(records) > 1 else last.t,

@@ -152,18 +152,22 @@ class ClosedChain:
         friction ratios |F_xy| / F_z is least (the motion does not determine it; rigid point feet
         take any share, and the one that needs the least friction is the one a floor holds first;
         each ratio is convex in the share while both feet press)."""
+        first = self.wrenches(q, qd, qdd, self.full_force(held))
         if not self.lateral_free:
-            return self.wrenches(q, qd, qdd, held)
+            return first
         from scipy.optimize import minimize_scalar  # SciPy's optimizers only where a walk holds both feet
 
+        tip_x = self.bm.swing_tip(q)[0]
+
         def at(lateral: float) -> np.ndarray:
-            return self.wrenches(q, qd, qdd, self.full_force(held, lateral))
+            """``wrenches`` with the new tip's lateral force ``lateral``: affine in it (the new tip
+            takes it, the old tip the rest, with its moment about the vertical)."""
+            return first + lateral * np.array([[0.0, -1.0, 0.0, -tip_x], [0.0, 1.0, 0.0, 0.0]])
 
         def ratio(lateral: float) -> float:
             w = at(lateral)
             return max(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else np.inf for f in w[:, :3])
 
-        first = at(0.0)
         if np.any(first[:, 2] <= 0):
             return first
         reach = abs(first[0, 1]) + np.abs(first[:, :2]).sum()

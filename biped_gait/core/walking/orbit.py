@@ -43,6 +43,10 @@ class PlannedOrbit:
     turn_radius: float = math.inf
     double_support: object = None
 
+    def touchdown_error(self, q: np.ndarray, qd: np.ndarray) -> float:
+        """max |(q, qd) - (q_T, qd_b)| (rad, rad/s): how far a touchdown state is from the plan's."""
+        return max(float(np.max(np.abs(q - self.q_t))), float(np.max(np.abs(qd - self.qd_b))))
+
     @classmethod
     def of(cls, gait) -> "PlannedOrbit":
         """The orbit of a solved ``gait.Gait``."""

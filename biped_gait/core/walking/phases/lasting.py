@@ -111,8 +111,7 @@ class HeldTouchdown(Phase):
         orbit = state.aim.orbit
         plan = orbit.double_support
         i_minus, held = held_landing(plan, end.q, end.qd)
-        error = max(float(np.max(np.abs(end.q - orbit.q_t))), float(np.max(np.abs(end.qd - orbit.qd_b))))
-        report = LastingTouchdown(state.t + end.t, error, plan.duration, i_minus, plan.i_minus, held.old, held.new)
+        report = LastingTouchdown(state.t + end.t, orbit.touchdown_error(end.q, end.qd), plan.duration, i_minus, plan.i_minus, held.old, held.new)
         return Transition(LastingDoubleSupport(plan, end.t, report, self.after), state.moved(end.t, end.q, held.qd))
 
 

@@ -41,8 +41,7 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
     (None: a touchdown). The next step's start and the touchdown report; ``Fall`` if no re-aim or
     no impulses reach it."""
     hybrid, feedback, bm, s = ctx.hybrid, ctx.feedback, ctx.hybrid.bm, state
-    q_t, qd_b = np.asarray(s.aim.orbit.q_t), np.asarray(s.aim.orbit.qd_b)
-    error = max(float(np.max(np.abs(q_td - q_t))), float(np.max(np.abs(qd_td - qd_b))))
+    error = s.aim.orbit.touchdown_error(q_td, qd_td)
     side = other_side(s.stance_side)
     try:
         aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step, feedback.advanced(s.aim, side), error,
@@ -92,6 +91,9 @@ def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.
                                                                planned.xd_b, foot_line_moment, again > 0, reaim_steps)
             except Fall as exc:
                 momentum = float(impact.momentum_row @ planned.xd_b)
+                if lift_off is not None:  # the plan's touchdown is no reference for a lift-off's state
+                    raise Fall(f"{exc} (at the lift-off, t = {s.t + t_step:.4f} s, the momentum about the feet "
+                               f"line, which no impulse changes, is {momentum:.2f} kg m^2/s)") from None
                 planned_momentum = float(hybrid.impact(q_t).momentum_row @ bm.embed(qd_b))
                 raise Fall(f"{exc} (at t = {s.t + t_step:.4f} s the momentum about the feet line, which no "
                            f"impulse changes, is {momentum:.2f} kg m^2/s where the plan's is "
