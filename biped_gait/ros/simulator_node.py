@@ -420,9 +420,14 @@ class SimulatorNode(Node):
 
     def _call_plan(self, request: PlanGait.Request, attempts: int = 5, patience: float = 10.0) -> PlanGait.Response:
         """Call plan_gait, sending again when no answer comes: right after discovery a DDS
-        response can be lost (the server has not yet matched our reader). The call is
+        response can be lost (the server has not yet matched our reader; Fast DDS waits 100 ms
+        for it, then drops the response). Each new attempt goes through a new client, whose
+        endpoints are discovered afresh: a pair of endpoints left unmatched (seen under load in
+        CI, no answer to five attempts in 50 s) does not take every attempt with it. The call is
         idempotent (and answered from the planner's cache)."""
         for attempt in range(1, attempts + 1):
+            if attempt > 1:
+                self._renew_plan_client()
             future = self.plan_client.call_async(request)
             try:
                 return self._answer(future, "plan_gait", patience)
@@ -432,6 +437,15 @@ class SimulatorNode(Node):
                     raise
             self.get_logger().warn(f"no answer from plan_gait in {patience:g} s (attempt {attempt}/{attempts})")
         raise NoPlan(f"no answer from plan_gait after {attempts} attempts")
+
+    def _renew_plan_client(self) -> None:
+        """Replace the plan_gait client by a new one and wait for it to see the service."""
+        old, service = self.plan_client, self.value["plan_service"]
+        self.plan_client = self.create_client(PlanGait, service, callback_group=self._group)
+        self.destroy_client(old)
+        self._wait_until(self.plan_client.service_is_ready, f"the planner service {service}", self.value["wait_timeout"])
+        settle = time.monotonic() + 1.0  # the server's side of discovery (``ClientSide.connect``)
+        self._wait_until(lambda: time.monotonic() > settle, "discovery to settle", 5.0)
 
     def _obtain_plan(self) -> list[GaitPlan]:
         """The steps of the gait to walk: one, or a stride's two (from the service only)."""
