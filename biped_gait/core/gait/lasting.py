@@ -85,6 +85,16 @@ WARM_START = {"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6, "ipop
               "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_mult_bound_push": 1e-9}
 
 
+def hermite_simpson(first, last, a_mid, h):
+    """The Hermite-Simpson rule (compressed form) over one interval of ``h`` s from ``first`` to
+    ``last`` (each (q, v, a)) with the midpoint's acceleration ``a_mid``: the midpoint's q and v and
+    the interval's defects in q and v (zero on a solution)."""
+    (q0, v0, a0), (q, v, a) = first, last
+    q_mid = (q0 + q) / 2 + h / 8 * (v0 - v)
+    v_mid = (v0 + v) / 2 + h / 8 * (a0 - a)
+    return q_mid, v_mid, q - q0 - h / 6 * (v0 + 4 * v_mid + v), v - v0 - h / 6 * (a0 + 4 * a_mid + a)
+
+
 @dataclass(frozen=True)
 class LastingRequest:
     """What the double support is asked: its duration (s), the effort to minimize (``l1`` or
@@ -213,11 +223,10 @@ class LastingProgram:
         x[self.at.tolist()] = q
         return x
 
-    def _build(self) -> None:
-        nq, nx, na, n_int = self.nq, self.nx, self.na, self.intervals
-        at, rows = self.at.tolist(), self.rows
-        periodic = self.kind == "periodic"
-        arrives, departs = self.kind in ("stop", "limit", "periodic"), self.kind in ("start", "limit", "periodic")
+    def _functions(self) -> None:
+        """The tips' positions and Jacobians, the inverse dynamics, the new tip's acceleration and
+        the mass matrix over X, as CasADi functions."""
+        nx = self.nx
         xs, vs, a_s = ca.SX.sym("x", nx), ca.SX.sym("v", nx), ca.SX.sym("a", nx)
         tip = self.sym.frame_position(xs, SWING_TIP)
         self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs),
@@ -228,6 +237,44 @@ class LastingProgram:
             ca.jtimes(tip, xs, a_s) + ca.jtimes(ca.jtimes(tip, xs, vs), xs, vs)])
         self.f_mass = ca.Function("mass", [xs], [ca.jacobian(self.sym.rnea(xs, ca.SX.zeros(nx), a_s), a_s)])
 
+    def _terms(self, nlp: "_Program", p_mu):
+        """``press(force, what, least=0)``: a reaction that presses (by ``least``, N) within the
+        floor's pyramid of coefficient ``p_mu`` (the impulses' inscribed one, section 4.4);
+        ``cost(values, weight, scale)``: the effort term of ``values`` (``l1`` through slacks)."""
+        sides = None
+        if math.isfinite(self.friction):
+            unit = pyramid(1.0)
+            sides = ca.horzcat(ca.DM(unit[:, :2]), p_mu * ca.DM(unit[:, 2]))
+
+        def press(force, what, least=0.0):
+            nlp.le(least - force[2], f"{what} presses")
+            if sides is not None:
+                nlp.le(ca.mtimes(sides, force[:3]), f"{what} within the friction pyramid")
+
+        def cost(values, weight, scale):
+            if self.effort == "l1":
+                s = nlp.var("s", values.shape[0], 0.0, scale=scale)
+                nlp.le(values - s, "effort")
+                nlp.le(-values - s, "effort")
+                nlp.cost.append(weight * ca.sum1(s))
+            else:
+                nlp.cost.append(weight * ca.sumsqr(values))
+
+        return press, cost
+
+    def _actuation(self) -> ca.DM:
+        """B: the actuated joints' columns in X's rows (nX x na)."""
+        b = np.zeros((self.nx, self.na))
+        b[self.at[self.actuated], np.arange(self.na)] = 1.0
+        return ca.DM(b)
+
+    def _build(self) -> None:
+        nq, nx, na, n_int = self.nq, self.nx, self.na, self.intervals
+        at = self.at.tolist()
+        periodic = self.kind == "periodic"
+        arrives, departs = self.kind in ("stop", "limit", "periodic"), self.kind in ("start", "limit", "periodic")
+        self._functions()
+
         # Parameters: the gait's touchdown q_T, Xd^b and Xd^a there, the posture at rest, d.
         p_q, p_rest = ca.SX.sym("q_t", nq), ca.SX.sym("q_rest", nq)
         p_xb, p_xa = ca.SX.sym("xd_b", nx), ca.SX.sym("xd_a", nx)
@@ -237,29 +284,9 @@ class LastingProgram:
         p_least, p_mu = ca.SX.sym("least_normal_force"), ca.SX.sym("friction")
         tip_t, j2_t, j1_t = self.f_tip(self._embed(p_q))
         d_t = self.f_mass(self._embed(p_q))
-        b = np.zeros((nx, na))
-        b[np.asarray(at)[self.actuated], np.arange(na)] = 1.0
-        b = ca.DM(b)
+        b = self._actuation()
         nlp = _Program()
-        # The impulses' inscribed pyramid (section 4.4), its coefficient the parameter's.
-        sides = None
-        if math.isfinite(self.friction):
-            unit = pyramid(1.0)
-            sides = ca.horzcat(ca.DM(unit[:, :2]), p_mu * ca.DM(unit[:, 2]))
-
-        def press(force, what, least=0.0):  # a reaction that presses (by ``least``), within the floor's pyramid
-            nlp.le(least - force[2], f"{what} presses")
-            if sides is not None:
-                nlp.le(ca.mtimes(sides, force[:3]), f"{what} within the friction pyramid")
-
-        def cost(values, weight, scale):
-            if self.effort == "l1":
-                s = nlp.var("s", na, 0.0, scale=scale)
-                nlp.le(values - s, "effort")
-                nlp.le(-values - s, "effort")
-                nlp.cost.append(weight * ca.sum1(s))
-            else:
-                nlp.cost.append(weight * ca.sumsqr(values))
+        press, cost = self._terms(nlp, p_mu)
 
         outputs = {}
         if periodic:
@@ -279,14 +306,7 @@ class LastingProgram:
             press(r1m, "the old tip's reaction to I^-")
             nlp.le(ca.mtimes(j2_t[2, :], xm), "the swing tip comes down")
             cost(im, 1.0, JOINT_IMPULSE)
-            # The passive impact, both tips held.
-            xh = nlp.var("xd_held", nx)
-            p1, p2 = nlp.var("p_old", 3, scale=self.impulse_scale), nlp.var("p_new", 3, scale=self.impulse_scale)
-            nlp.eq(ca.mtimes(d_t, xh - xm) - ca.mtimes(j1_t.T, p1) - ca.mtimes(j2_t.T, p2), "the held impact")
-            nlp.eq(ca.mtimes(j1_t, xh), "the held impact: old tip at rest")
-            nlp.eq(ca.mtimes(j2_t[rows, :], xh), "the held impact: new tip at rest")
-            press(p1, "the held impact's old tip impulse")
-            press(p2, "the held impact's new tip impulse")
+            xh, p1, p2 = self._held_impact(nlp, xm, (d_t, j1_t, j2_t), press)
             outputs.update(i_minus=im, p_old=p1, p_new=p2)
         x_end = xh if self.kind == "limit" else None
         if self.kind == "limit":
@@ -324,20 +344,30 @@ class LastingProgram:
             press(r2p, "the new tip's reaction to I^+")
             cost(ip, 1.0, JOINT_IMPULSE)
             outputs["i_plus"] = ip
+        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d, p_least, p_mu)
+        start_map = None
+        if periodic:  # the flow starts from the lift-off posture exchanged, with the next step's velocity
+            start_map = np.zeros((2 * nq, nlp.size))
+            start_map[:nq, nlp.last_node_q:nlp.last_node_q + nq] = self.exchange.matrix
+            start_map[nq:, nlp.where["qd_next"]:nlp.where["qd_next"] + nq] = np.eye(nq)
+        self._finish(nlp, params, outputs, start_map)
+
+    def _finish(self, nlp: "_Program", params, outputs: dict, start_map: np.ndarray | None) -> None:
+        """The program written (``nlp``, its parameters ``params``) made a solver, with the
+        ballistic flow's constraint if ``start_map`` (the unknowns to the flow's start) is given,
+        its end the unknown ``flow_end``; ``outputs`` a function of the solution."""
         self.names = nlp.names
         self.lbw, self.ubw = np.concatenate(nlp.lbw), np.concatenate(nlp.ubw)
         self.lbg, self.ubg = np.concatenate(nlp.lbg), np.concatenate(nlp.ubg)
         self.row_names = nlp.rows
         self.scale = np.concatenate(nlp.scales)
-        params = ca.vertcat(p_q, p_rest, ca.SX.sym("xd_b", nx) if periodic else p_xb, p_xa, p_d, p_least, p_mu)
         w = ca.vertcat(*nlp.w)
         problem = {"x": w, "f": sum(nlp.cost), "g": ca.vertcat(*nlp.g), "p": params}
         self.where = nlp.where
-        if periodic:
-            problem = self._with_flow(problem, nlp)
         options = {"ipopt.tol": TOLERANCE, "ipopt.constr_viol_tol": TOLERANCE, "ipopt.print_level": 0,
                    "ipopt.max_iter": MAX_ITERATIONS, "print_time": False, "ipopt.sb": "yes"}
-        if periodic:
+        if start_map is not None:
+            problem = self._with_flow(problem, nlp, start_map)
             # The ballistic flow's second derivatives are not computed. Measured: the exact Hessian
             # of the rest with the flow's curvature left out stalls (3000 iterations at d = 0.1 s
             # at the default gait), where the limited-memory approximation converges (about 200).
@@ -346,22 +376,34 @@ class LastingProgram:
         self._warm = (problem, {**options, **WARM_START})
         self.outputs = ca.Function("outputs", [w, params], list(outputs.values()), ["w", "p"], list(outputs))
 
-    def _with_flow(self, problem: dict, nlp: "_Program") -> dict:
+    def _held_impact(self, nlp: "_Program", xm, at_touchdown: tuple, press) -> tuple:
+        """The passive impact from the velocity ``xm`` with both tips held (``at_touchdown``: the
+        mass matrix and the old and new tip's Jacobians there): the held velocity and both tips'
+        impulses, each pressing within the pyramid."""
+        d_t, j1_t, j2_t = at_touchdown
+        xh = nlp.var("xd_held", self.nx)
+        p1, p2 = nlp.var("p_old", 3, scale=self.impulse_scale), nlp.var("p_new", 3, scale=self.impulse_scale)
+        nlp.eq(ca.mtimes(d_t, xh - xm) - ca.mtimes(j1_t.T, p1) - ca.mtimes(j2_t.T, p2), "the held impact")
+        nlp.eq(ca.mtimes(j1_t, xh), "the held impact: old tip at rest")
+        nlp.eq(ca.mtimes(j2_t[self.rows, :], xh), "the held impact: new tip at rest")
+        press(p1, "the held impact's old tip impulse")
+        press(p2, "the held impact's new tip impulse")
+        return xh, p1, p2
+
+    def _with_flow(self, problem: dict, nlp: "_Program", start_map: np.ndarray) -> dict:
         """The SX program with the ballistic flow's constraint added: the flow's end, unknowns of the
-        program, equals the flow from the lift-off posture exchanged and the next step's start
-        velocity (``flow_function.CoupledConstraints``)."""
+        program (``flow_end``), equals the flow from ``start_map`` times the unknowns
+        (``flow_function.CoupledConstraints``)."""
         nq, nw = self.nq, problem["x"].shape[0]
         inner = ca.Function("inner", [problem["x"], problem["p"]], [problem["g"]])
-        start_map, end_map = np.zeros((2 * nq, nw)), np.zeros((2 * nq, nw))
-        start_map[:nq, nlp.last_node_q:nlp.last_node_q + nq] = self.exchange.matrix
-        start_map[nq:, self.where["qd_next"]:self.where["qd_next"] + nq] = np.eye(nq)
+        end_map = np.zeros((2 * nq, nw))
         end = self.where["flow_end"]
         end_map[:, end:end + 2 * nq] = np.eye(2 * nq)
         scale = np.concatenate(nlp.scales)
         self.flow_function = FlowFunction("ballistic_flow", self.flow, math.nan, nq)
         self.constraints = CoupledConstraints("constraints", inner, self.flow_function, start_map * scale,
                                               end_map * scale)
-        self.row_names = self.row_names + ["the ballistic flow from the lift-off"] * (2 * nq)
+        self.row_names = self.row_names + ["the ballistic flow"] * (2 * nq)
         self.lbg = np.concatenate([self.lbg, np.zeros(2 * nq)])
         self.ubg = np.concatenate([self.ubg, np.zeros(2 * nq)])
         w, p = ca.MX.sym("w", nw), ca.MX.sym("p", problem["p"].shape[0])
@@ -389,11 +431,8 @@ class LastingProgram:
                 if v_first is None:
                     nlp.eq(a, "at rest")
             else:
-                q0, v0, a0 = previous
                 a_m = nlp.var("a_mid", nq, scale=ACCELERATION)
-                v_m = (v0 + v) / 2 + h / 8 * (a0 - a)
-                q_defect = q - q0 - h / 6 * (v0 + 4 * v_m + v)
-                v_defect = v - v0 - h / 6 * (a0 + 4 * a_m + a)
+                q_m, v_m, q_defect, v_defect = hermite_simpson(previous, (q, v, a), a_m, h)
                 if q_last is not None:
                     # A phase that ends at a given posture: the tip also held at the nodes in
                     # position and velocity, the defects corrected along the held rows (Posa,
@@ -407,7 +446,7 @@ class LastingProgram:
                 nlp.eq(q_defect, "collocation")
                 nlp.eq(v_defect, "collocation")
                 tau_m = nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE)
-                points.append([(q0 + q) / 2 + h / 8 * (v0 - v), v_m, a_m, tau_m,
+                points.append([q_m, v_m, a_m, tau_m,
                                nlp.var("f_new_mid", 3, scale=self.weight), 4.0])
             points.append([q, v, a, tau, f2, 1.0 if k in (0, n_int) else 2.0])
             previous = (q, v, a)
