@@ -191,6 +191,8 @@ class LastingProgram:
     """The nonlinear program of a double support of ``intervals`` collocation intervals for the
     model ``bm`` (built once, solved for any gait and duration: those are its parameters)."""
 
+    SOLVER_OPTIONS: dict = {}  # IPOPT's options beyond the module's (a program with more phases sets its own)
+
     def __init__(self, bm: BipedModel, kind: str, intervals: int, effort: str = "l1",
                  friction: float = 0.5, exchange=None, flow: BallisticFlow | None = None) -> None:
         if kind not in KINDS:
@@ -365,7 +367,7 @@ class LastingProgram:
         problem = {"x": w, "f": sum(nlp.cost), "g": ca.vertcat(*nlp.g), "p": params}
         self.where = nlp.where
         options = {"ipopt.tol": TOLERANCE, "ipopt.constr_viol_tol": TOLERANCE, "ipopt.print_level": 0,
-                   "ipopt.max_iter": MAX_ITERATIONS, "print_time": False, "ipopt.sb": "yes"}
+                   "ipopt.max_iter": MAX_ITERATIONS, "print_time": False, "ipopt.sb": "yes", **self.SOLVER_OPTIONS}
         if start_map is not None:
             problem = self._with_flow(problem, nlp, start_map)
             # The ballistic flow's second derivatives are not computed. Measured: the exact Hessian
