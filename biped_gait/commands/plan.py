@@ -25,6 +25,7 @@ def run(args: argparse.Namespace) -> int:
     fields = request_fields(args, exclude=("params",))
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
     lasting = lasting_request(request, args.double_support)
+    swing = swing_request(args.actuated_swing, args.double_support, request)
     planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
         gait = planner.plan_stride(request)
@@ -35,7 +36,14 @@ def run(args: argparse.Namespace) -> int:
         print(views.summary(gait))
         result, drawn = views.to_dict(gait), gait
     admissible = gait.admissible
-    if lasting is not None and gait.usable:
+    if swing is not None and gait.usable:
+        from ..core.gait.actuated_swing import ActuatedSwingPlanner, cycle_view  # CasADi only when asked
+
+        cycle = ActuatedSwingPlanner(planner.lasting).cycle(gait, swing)
+        print(swing_summary(cycle, gait.W))
+        result.update(cycle_view(cycle))
+        admissible = admissible and cycle.success
+    elif lasting is not None and gait.usable:
         support, limit = planner.lasting_cycle(gait, lasting)
         print(lasting_summary(support, limit.effort_total, gait.W))
         result["double_support_phase"] = views.double_support_phase(support, limit.effort_total)
@@ -50,6 +58,37 @@ def run(args: argparse.Namespace) -> int:
     if files:
         print("written: " + ", ".join(files))
     return 0 if admissible else 1
+
+
+def swing_request(actuated_swing: float, double_support: float, request: GaitRequest):
+    """The cycle with an actuated swing asked (``actuated_swing`` s at each end of the swing,
+    ``double_support`` s of double support, the least effort without margins), or None for 0;
+    ``ValueError`` (one line) for a duration that is none or beside a stride on a circle."""
+    if actuated_swing == 0.0:
+        return None
+    from ..core.gait.actuated_swing import SwingRequest
+    from ..core.gait.lasting import LastingRequest
+
+    swing = SwingRequest(actuated_swing, LastingRequest(double_support, request.effort))
+    if 2 * actuated_swing >= request.period:
+        raise ValueError(f"actuated_swing must be below half the period ({request.period / 2:g} s), "
+                         f"got {actuated_swing:g} s")
+    if math.isfinite(request.turn_radius):
+        raise ValueError("actuated_swing: planned for straight gaits only")
+    return swing
+
+
+def swing_summary(cycle, paper_effort: float) -> str:
+    """A few lines on a cycle with an actuated swing."""
+    head = (f"swing actuated for {cycle.actuated_swing:g} s at each end, double support of "
+            f"{cycle.support.duration:g} s")
+    if not cycle.success:
+        return f"{head}: refused: {cycle.message}"
+    peak = ", ".join(f"{v:.0f}" for v in cycle.peak_torque)
+    return (f"{head}: E = {cycle.effort_l1:.3f} N m s (no impulse), W = {paper_effort:.3f} N m s\n"
+            f"  peak torques {peak} N m; friction used {cycle.friction_used:.3f}; held impact "
+            f"{abs(cycle.support.held_impact_impulses).max():.2g} N s; IPOPT {cycle.iterations} iterations, "
+            f"{cycle.solve_time_s:.2f} s")
 
 
 def lasting_summary(support: LastingSupport, limit_effort: float, paper_effort: float) -> str:

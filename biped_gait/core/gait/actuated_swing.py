@@ -36,6 +36,7 @@ import casadi as ca
 import numpy as np
 
 from ..dynamics.flow import hermite_samples
+from . import views
 from .lasting import (ACCELERATION, INTERVALS, TOLERANCE, TORQUE, LastingProgram, LastingRequest, _Program,
                       hermite_simpson)
 from .lasting_support import LastingSupport
@@ -365,3 +366,19 @@ class ActuatedSwingPlanner:
         else:
             values.update(q=[boundary.q_t] * 2, v=[held["xd_held"][at]] * 2, f_new=[weight] * 2, f_new_mid=[weight])
         return values
+
+
+def cycle_view(cycle: ActuatedSwingCycle) -> dict:
+    """The cycle as the plan's JSON has it: ``swing_phases`` (its two actuated ends, in the plan's
+    ``double_support_coordinates`` with the stance tip held at the origin, and ``actuated_joints``),
+    ``double_support_phase`` (the held touchdown and the phase; no impulse), ``peak_torque`` over
+    the cycle (N m) and its efforts (N m s)."""
+    ends = {name: {"t": end.t, "X": end.x, "Xd": end.xd, "Xdd": end.xdd, "torques": end.torques,
+                   "contact_forces": end.contact_forces}
+            for name, end in (("start", cycle.start), ("end", cycle.end))}
+    return views.clean({"actuated_swing": cycle.actuated_swing,
+                        "swing_phases": {"success": cycle.success, "message": cycle.message, **ends},
+                        "double_support_phase": views.double_support_phase(cycle.support, math.nan),
+                        "peak_torque": cycle.peak_torque, "effort_total": cycle.effort_l1,
+                        "effort_l2": cycle.effort_l2, "friction_used": cycle.friction_used,
+                        "iterations": cycle.iterations, "solve_time_s": cycle.solve_time_s})
