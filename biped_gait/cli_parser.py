@@ -48,7 +48,7 @@ def _plan(sub) -> None:
     add_json(plan, "the full result (every figure and the sampled step)")
     plan.add_argument("--double-support", type=float, default=0.0, metavar="S",
                       help="a double support that lasts S seconds between the paper's two impulses, with finite "
-                      "torques (solved by IPOPT; legs of pitch joints only); default 0, the paper's instantaneous one")
+                      "torques (solved by IPOPT; straight gaits); default 0, the paper's instantaneous one")
     plan.add_argument("--out", type=Path, metavar="DIR", help="write plan.json and plan.png (the step: the biped from "
                       "the side, joint angles, ground reaction and friction ratio, yaw momentum) in this folder")
     _run(plan, "plan:run")

@@ -39,6 +39,17 @@ the flow's sensitivities. The effort minimized is
 
 or E2 = Sum (I^-)^2 + integral Gamma' Gamma dt + Sum (I^+)^2 (``l2``).
 
+With lateral hip joints (``aoustin2013-hips``) the double-support model has the old stance foot's
+spin among its root coordinates (``biped.STANCE_SPIN``, held at zero: its moment is a root row of
+the inverse dynamics, as the old tip's force), and the new foot is held in x, y, z and in its
+heading (``_held_quantities``), each with a reaction unknown (a spin moment for the heading); the
+impulses' equations hold the same rows. The leg exchange is then ``KinematicExchange``'s, not
+linear: the periodic program writes it in symbols (``_next_step``), the next start posture and
+the velocity after I^+ unknowns tied to the lift-off posture by the landing shin's Euler angles.
+Each spin moment (and moment impulse) stays within the feet's torsional friction, |M| <=
+``mjcf.TORSIONAL_FRICTION`` F_z (0.05 m, MuJoCo's): the paper's pivot holds any, and with it free
+the optimum twists the feet against the floor with the hips' yaw at its 200 N m limit.
+
 Units SI, rad; forces N, impulses N s, joint impulses N m s.
 """
 
@@ -58,6 +69,7 @@ from ..dynamics.impulses import pyramid
 from ..dynamics.symbolic import SymbolicModel
 from ..model.biped import STANCE_SPIN, STANCE_TIP, SWING_TIP, BipedModel
 from ..model.exchange import MIRROR
+from ..model.mjcf import TORSIONAL_FRICTION
 from .flow_function import CoupledConstraints, FlowFunction
 from .lasting_support import IMPULSE_TIME, LastingSupport
 
@@ -275,6 +287,9 @@ class LastingProgram:
             nlp.le(least - force[2], f"{what} presses")
             if sides is not None:
                 nlp.le(ca.mtimes(sides, force[:3]), f"{what} within the friction pyramid")
+            if force.shape[0] == 4:  # a spin moment: within the foot's torsional friction
+                nlp.le(ca.vertcat(force[3], -force[3]) - TORSIONAL_FRICTION * force[2],
+                       f"{what}'s spin moment within the torsional friction")
 
         def cost(values, weight, scale):
             if self.effort == "l1":
@@ -339,8 +354,8 @@ class LastingProgram:
             # within their limits keep both reactions pressing (what any d > 0 asks from its start).
             effort_limit = self.effort_limits
             self._held(nlp, p_q, xh[at], nlp.var("a", nq, scale=ACCELERATION),
-                       nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", self.reaction_size, scale=self.weight),
-                       b, press, p_least)
+                       nlp.var("tau", na, -effort_limit, effort_limit, TORQUE),
+                       nlp.var("f_new", self.reaction_size, scale=self.weight), b, press, p_least)
         if n_int > 0:
             points = self._phase(nlp, p_d, p_q if arrives else p_rest, xh[at] if arrives else None,
                                  None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost,
@@ -480,7 +495,8 @@ class LastingProgram:
         for k in range(n_int + 1):
             nlp.last_node_q = nlp.size
             q, v, a = nlp.var("q", nq, lower_q, upper_q), nlp.var("v", nq), nlp.var("a", nq, scale=ACCELERATION)
-            tau, f2 = nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", self.reaction_size, scale=self.weight)
+            tau = nlp.var("tau", na, -effort_limit, effort_limit, TORQUE)
+            f2 = nlp.var("f_new", self.reaction_size, scale=self.weight)
             if k == 0:
                 nlp.eq(q - q_first, "the first posture")
                 nlp.eq(v if v_first is None else v - v_first, "the first velocity")
