@@ -48,7 +48,7 @@ def _plan(sub) -> None:
     add_json(plan, "the full result (every figure and the sampled step)")
     plan.add_argument("--double-support", type=float, default=0.0, metavar="S",
                       help="a double support that lasts S seconds between the paper's two impulses, with finite "
-                      "torques (solved by IPOPT; legs of pitch joints only); default 0, the paper's instantaneous one")
+                      "torques (solved by IPOPT; straight gaits); default 0, the paper's instantaneous one")
     plan.add_argument("--actuated-swing", type=float, default=0.0, metavar="S",
                       help="the swing actuated for its first and last S seconds, with torques within the joints' "
                       "effort limits, and ballistic between, in place of the impulses (the least-effort cycle, "

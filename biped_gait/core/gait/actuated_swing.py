@@ -131,6 +131,10 @@ class ActuatedSwingProgram(LastingProgram):
 
     def __init__(self, bm, intervals: int, effort: str = "l1", friction: float = 0.5, exchange=None,
                  flow=None) -> None:
+        if bm.params.joints.lateral_hips:
+            raise ValueError(f"{bm.params.name}: an actuated swing is planned for legs of pitch joints only "
+                             "(aoustin2013, aoustin2013-table): the kinematic leg exchange at its lift-off is not "
+                             "written in its program yet")
         super().__init__(bm, "periodic", intervals, effort, friction, exchange, flow)
 
     def _build(self) -> None:

@@ -39,6 +39,17 @@ the flow's sensitivities. The effort minimized is
 
 or E2 = Sum (I^-)^2 + integral Gamma' Gamma dt + Sum (I^+)^2 (``l2``).
 
+With lateral hip joints (``aoustin2013-hips``) the double-support model has the old stance foot's
+spin among its root coordinates (``biped.STANCE_SPIN``, held at zero: its moment is a root row of
+the inverse dynamics, as the old tip's force), and the new foot is held in x, y, z and in its
+heading (``_held_quantities``), each with a reaction unknown (a spin moment for the heading); the
+impulses' equations hold the same rows. The leg exchange is then ``KinematicExchange``'s, not
+linear: the periodic program writes it in symbols (``_next_step``), the next start posture and
+the velocity after I^+ unknowns tied to the lift-off posture by the landing shin's Euler angles.
+Each spin moment (and moment impulse) stays within the feet's torsional friction, |M| <=
+``mjcf.TORSIONAL_FRICTION`` F_z (0.05 m, MuJoCo's): the paper's pivot holds any, and with it free
+the optimum twists the feet against the floor with the hips' yaw at its 200 N m limit.
+
 Units SI, rad; forces N, impulses N s, joint impulses N m s.
 """
 
@@ -56,7 +67,9 @@ from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.flow import BallisticFlow
 from ..dynamics.impulses import pyramid
 from ..dynamics.symbolic import SymbolicModel
-from ..model.biped import STANCE_TIP, SWING_TIP, BipedModel
+from ..model.biped import STANCE_SPIN, STANCE_TIP, SWING_TIP, BipedModel
+from ..model.exchange import MIRROR
+from ..model.mjcf import TORSIONAL_FRICTION
 from .flow_function import CoupledConstraints, FlowFunction
 from .lasting_support import IMPULSE_TIME, LastingSupport
 
@@ -208,11 +221,10 @@ class LastingProgram:
         self.at = np.asarray(bm.ds_of_single)
         self.roots = np.setdiff1d(np.arange(self.nx), self.at)
         self.lateral_free = not bm.params.joints.lateral_hips
-        if not self.lateral_free:
-            raise ValueError(f"{bm.params.name}: a lasting double support is planned for legs of pitch joints only "
-                             "(aoustin2013, aoustin2013-table): with lateral hip joints the new foot's spin row is not "
-                             "written in the program yet")
-        self.rows = [0, 2]  # the new tip's held rows (x, z): section 12
+        # The new tip's held rows: x and z with legs of pitch joints (section 12); with lateral hip
+        # joints x, y, z and the new foot's heading (``_held_quantities``).
+        self.rows = [0, 2] if self.lateral_free else [0, 1, 2, 3]
+        self.reaction_size = 3 if self.lateral_free else 4  # a tip's reaction: force, and spin moment with lateral hips
         self.actuated = np.asarray(bm.actuated)
         self.effort_limits = np.array([bm.coordinates[k].spec.limits.effort for k in self.actuated])  # N m
         self.weight = bm.total_mass * bm.params.gravity
@@ -230,14 +242,37 @@ class LastingProgram:
         the mass matrix over X, as CasADi functions."""
         nx = self.nx
         xs, vs, a_s = ca.SX.sym("x", nx), ca.SX.sym("v", nx), ca.SX.sym("a", nx)
-        tip = self.sym.frame_position(xs, SWING_TIP)
-        self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs),
-                                               ca.jacobian(self.sym.frame_position(xs, STANCE_TIP), xs)])
+        tip = self._held_quantities(xs)
+        old = ca.jacobian(self.sym.frame_position(xs, STANCE_TIP), xs)
+        if not self.lateral_free:  # the old foot's spin, a coordinate of X, held at zero
+            old = ca.vertcat(old, ca.DM(np.eye(nx)[[self.bm.ds_names.index(STANCE_SPIN)]]))
+        self.f_tip = ca.Function("tip", [xs], [tip, ca.jacobian(tip, xs), old])
+        if not self.lateral_free:  # the landing shin's roll and pitch, and their rates
+            angles = ca.vertcat(*self._landing(xs)[1:])
+            self.f_landing = ca.Function("landing", [xs, vs], [angles, ca.jtimes(angles, xs, vs)])
         self.f_rnea = ca.Function("rnea", [xs, vs, a_s], [self.sym.rnea(xs, vs, a_s)])
         # The new tip's acceleration J a + (d(J v)/dX) v: held at every collocation point.
         self.f_tip_acceleration = ca.Function("tip_acceleration", [xs, vs, a_s], [
             ca.jtimes(tip, xs, a_s) + ca.jtimes(ca.jtimes(tip, xs, vs), xs, vs)])
         self.f_mass = ca.Function("mass", [xs], [ca.jacobian(self.sym.rnea(xs, ca.SX.zeros(nx), a_s), a_s)])
+
+    def _landing(self, x) -> tuple:
+        """(phi, roll, pitch) of the new stance shin at X: its mirror image M R M = Rz(phi)
+        Rx(roll) Ry(pitch) (``KinematicExchange._landing``), as CasADi expressions."""
+        shin = self.bm.double_support.getJointId(self.bm.names[self.bm.index("knee", "swing")])
+        r = self.sym.placements(x)[shin - 1][0]
+        landing = ca.mtimes([ca.DM(MIRROR), r, ca.DM(MIRROR)])
+        return (ca.atan2(-landing[0, 1], landing[1, 1]), ca.asin(landing[2, 1]),
+                ca.atan2(-landing[2, 0], landing[2, 2]))
+
+    def _held_quantities(self, x):
+        """What the ground holds of the new foot at X: its tip's position (m), and with lateral hip
+        joints its heading phi (rad), the new stance shin's turn about the vertical, which the
+        ground's spin moment keeps at its touchdown value (its rate is zero where
+        ``KinematicExchange.spin_row``'s is: both say the shin turns about its pivot's roll and
+        pitch axes only)."""
+        tip = self.sym.frame_position(x, SWING_TIP)
+        return tip if self.lateral_free else ca.vertcat(tip, self._landing(x)[0])
 
     def _terms(self, nlp: "_Program", p_mu):
         """``press(force, what, least=0)``: a reaction that presses (by ``least``, N) within the
@@ -252,6 +287,9 @@ class LastingProgram:
             nlp.le(least - force[2], f"{what} presses")
             if sides is not None:
                 nlp.le(ca.mtimes(sides, force[:3]), f"{what} within the friction pyramid")
+            if force.shape[0] == 4:  # a spin moment: within the foot's torsional friction
+                nlp.le(ca.vertcat(force[3], -force[3]) - TORSIONAL_FRICTION * force[2],
+                       f"{what}'s spin moment within the torsional friction")
 
         def cost(values, weight, scale):
             if self.effort == "l1":
@@ -302,7 +340,7 @@ class LastingProgram:
         if arrives:
             # I^-: the old tip held (eqs. 6-7), the swing tip coming down onto the ground.
             xm, im = nlp.var("xd_minus", nx), nlp.var("i_minus", na, scale=JOINT_IMPULSE)
-            r1m = nlp.var("r1_minus", 3, scale=self.impulse_scale)
+            r1m = nlp.var("r1_minus", self.reaction_size, scale=self.impulse_scale)
             nlp.eq(ca.mtimes(d_t, xm - p_xb) - ca.mtimes(b, im) - ca.mtimes(j1_t.T, r1m), "I^- (eq. 6)")
             nlp.eq(ca.mtimes(j1_t, xm), "I^- (eq. 7)")
             press(r1m, "the old tip's reaction to I^-")
@@ -316,8 +354,8 @@ class LastingProgram:
             # within their limits keep both reactions pressing (what any d > 0 asks from its start).
             effort_limit = self.effort_limits
             self._held(nlp, p_q, xh[at], nlp.var("a", nq, scale=ACCELERATION),
-                       nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight),
-                       b, press, p_least)
+                       nlp.var("tau", na, -effort_limit, effort_limit, TORQUE),
+                       nlp.var("f_new", self.reaction_size, scale=self.weight), b, press, p_least)
         if n_int > 0:
             points = self._phase(nlp, p_d, p_q if arrives else p_rest, xh[at] if arrives else None,
                                  None if periodic else (p_q if departs else p_rest), not departs, tip_t, b, press, cost,
@@ -327,20 +365,25 @@ class LastingProgram:
             x_end = self._embed(points[-1][1])
         if departs:
             # I^+: the new tip held, onto Xd^a (eq. 10), at the lift-off posture.
-            ip, r2p = nlp.var("i_plus", na, scale=JOINT_IMPULSE), nlp.var("r2_plus", 3, scale=self.impulse_scale)
+            ip = nlp.var("i_plus", na, scale=JOINT_IMPULSE)
+            r2p = nlp.var("r2_plus", self.reaction_size, scale=self.impulse_scale)
             d_l, j2_l, xd_a = d_t, j2_t, p_xa
             push = ca.DM.zeros(nx)
             if periodic:
                 q_l = points[-1][0]
                 _, j2_l, j1_l = self.f_tip(self._embed(q_l))
                 d_l = self.f_mass(self._embed(q_l))
-                qd = ca.mtimes(ca.DM(self.exchange.inverse), qd_next)
-                xd_a = ca.vertcat(-ca.mtimes(j2_l[:, 3:], qd), qd)  # LinearExchange.next_velocity
+                if self.lateral_free:
+                    qd = ca.mtimes(ca.DM(self.exchange.inverse), qd_next)
+                    xd_a = ca.vertcat(-ca.mtimes(j2_l[:, 3:], qd), qd)  # LinearExchange.next_velocity
+                else:
+                    xd_a = self._next_step(nlp, q_l, j2_l, qd_next)
                 nlp.le(-xd_a[2], "the old tip leaves the ground")
-                # The old tip's push-off, if the request asks for one (its bounds, ``solve``).
+                # The old tip's push-off, if the request asks for one (its bounds, ``solve``): a force
+                # impulse (the foot leaves, its spin free).
                 r1p = nlp.var("r1_plus", 3, scale=self.impulse_scale)
                 press(r1p, "the old tip's push-off")
-                push = ca.mtimes(j1_l.T, r1p)
+                push = ca.mtimes(j1_l[:3, :].T, r1p)
                 outputs["push_off"] = r1p
             nlp.eq(ca.mtimes(d_l, xd_a - x_end) - ca.mtimes(b, ip) - ca.mtimes(j2_l.T, r2p) - push, "I^+ (eq. 10)")
             press(r2p, "the new tip's reaction to I^+")
@@ -350,9 +393,34 @@ class LastingProgram:
         start_map = None
         if periodic:  # the flow starts from the lift-off posture exchanged, with the next step's velocity
             start_map = np.zeros((2 * nq, nlp.size))
-            start_map[:nq, nlp.last_node_q:nlp.last_node_q + nq] = self.exchange.matrix
+            if self.lateral_free:
+                start_map[:nq, nlp.last_node_q:nlp.last_node_q + nq] = self.exchange.matrix
+            else:
+                start_map[:nq, nlp.where["q_next"]:nlp.where["q_next"] + nq] = np.eye(nq)
             start_map[nq:, nlp.where["qd_next"]:nlp.where["qd_next"] + nq] = np.eye(nq)
         self._finish(nlp, params, outputs, start_map)
+
+    def _next_step(self, nlp: "_Program", q_l, j2_l, qd_next):
+        """With lateral hip joints, the leg exchange at the lift-off posture ``q_l`` written into the
+        program (``KinematicExchange``'s maps, symbolic): the next step's start posture ``q_next``,
+        an unknown, is the joint map of ``q_l`` with the new stance ankle's roll and pitch those of
+        the landing shin (``_landing``); the velocity after I^+ (X, returned), an unknown, holds the
+        new tip at rest and its foot's heading (``j2_l``), and maps onto ``qd_next`` by the joint
+        map and the rates of the landing shin's roll and pitch. The heading phi itself is the new
+        foot's, held from the touchdown (zero on a straight gait: the cycle does not turn)."""
+        nq, at = self.nq, self.at
+        q_next, xd_a = nlp.var("q_next", nq), nlp.var("xd_next", self.nx)
+        angles, rates = self.f_landing(self._embed(q_l), xd_a)
+        ankle = [self.bm.index("ankle_roll"), self.bm.index("ankle_pitch")]
+        posture, velocity = [None] * nq, [None] * nq
+        for i, j, sign in self.exchange.joints:
+            posture[i], velocity[i] = sign * q_l[j], sign * xd_a[int(at[j])]
+        for k, i in enumerate(ankle):
+            posture[i], velocity[i] = angles[k], rates[k]
+        nlp.eq(q_next - ca.vertcat(*posture), "the next step's start posture (the leg exchange)")
+        nlp.eq(qd_next - ca.vertcat(*velocity), "the next step's start velocity (the leg exchange)")
+        nlp.eq(ca.mtimes(j2_l, xd_a), "the new tip at rest after I^+, its foot not turning")
+        return xd_a
 
     def _finish(self, nlp: "_Program", params, outputs: dict, start_map: np.ndarray | None) -> None:
         """The program written (``nlp``, its parameters ``params``) made a solver, with the
@@ -384,7 +452,8 @@ class LastingProgram:
         impulses, each pressing within the pyramid."""
         d_t, j1_t, j2_t = at_touchdown
         xh = nlp.var("xd_held", self.nx)
-        p1, p2 = nlp.var("p_old", 3, scale=self.impulse_scale), nlp.var("p_new", 3, scale=self.impulse_scale)
+        p1 = nlp.var("p_old", self.reaction_size, scale=self.impulse_scale)
+        p2 = nlp.var("p_new", self.reaction_size, scale=self.impulse_scale)
         nlp.eq(ca.mtimes(d_t, xh - xm) - ca.mtimes(j1_t.T, p1) - ca.mtimes(j2_t.T, p2), "the held impact")
         nlp.eq(ca.mtimes(j1_t, xh), "the held impact: old tip at rest")
         nlp.eq(ca.mtimes(j2_t[self.rows, :], xh), "the held impact: new tip at rest")
@@ -426,7 +495,8 @@ class LastingProgram:
         for k in range(n_int + 1):
             nlp.last_node_q = nlp.size
             q, v, a = nlp.var("q", nq, lower_q, upper_q), nlp.var("v", nq), nlp.var("a", nq, scale=ACCELERATION)
-            tau, f2 = nlp.var("tau", na, -effort_limit, effort_limit, TORQUE), nlp.var("f_new", 3, scale=self.weight)
+            tau = nlp.var("tau", na, -effort_limit, effort_limit, TORQUE)
+            f2 = nlp.var("f_new", self.reaction_size, scale=self.weight)
             if k == 0:
                 nlp.eq(q - q_first, "the first posture")
                 nlp.eq(v if v_first is None else v - v_first, "the first velocity")
@@ -449,7 +519,7 @@ class LastingProgram:
                 nlp.eq(v_defect, "collocation")
                 tau_m = nlp.var("tau_mid", na, -effort_limit, effort_limit, TORQUE)
                 points.append([q_m, v_m, a_m, tau_m,
-                               nlp.var("f_new_mid", 3, scale=self.weight), 4.0])
+                               nlp.var("f_new_mid", self.reaction_size, scale=self.weight), 4.0])
             points.append([q, v, a, tau, f2, 1.0 if k in (0, n_int) else 2.0])
             previous = (q, v, a)
         if q_last is not None:
@@ -479,7 +549,7 @@ class LastingProgram:
                "the closed chain's equations of motion")
         if accelerating:
             nlp.eq(self.f_tip_acceleration(x, self._embed(v), self._embed(a))[rows], "the new tip held (its acceleration)")
-        f1 = generalized[roots] - f2
+        f1 = generalized[roots] - ca.mtimes(j2_k[:, roots].T, f2)  # the new tip's share of the root rows
         press(f1, "the old tip's reaction", least)
         press(f2, "the new tip's reaction", least)
         return f1
@@ -527,8 +597,9 @@ class LastingProgram:
         if "xd_held" in impulsive:  # the closed chain's own motion from the held velocity, torque-free
             qd = impulsive["xd_held"][self.at]
             qdd, held = ClosedChain(self.bm, self.exchange).forward(boundary.q_t, qd, np.zeros(self.na))
-            moving = {"v": qd, "a": qdd, "a_mid": qdd, "f_new": [held[0], 0.0, held[1]],
-                      "f_new_mid": [held[0], 0.0, held[1]]}
+            if self.lateral_free:  # x and z held, no lateral force
+                held = [held[0], 0.0, held[1]]
+            moving = {"v": qd, "a": qdd, "a_mid": qdd, "f_new": held, "f_new_mid": held}
         weight = self.bm.total_mass * self.bm.params.gravity
         first, last = {"stop": (boundary.q_t, boundary.q_rest), "start": (boundary.q_rest, boundary.q_t)}.get(
             self.kind, (boundary.q_t, boundary.q_t))
@@ -537,11 +608,15 @@ class LastingProgram:
                 w0[offset:offset + size] = first + (last - first) * node / max(self.intervals, 1)
                 node += 1
             elif name in ("f_new", "f_new_mid"):
-                w0[offset:offset + size] = [0.0, 0.0, weight / 2]
+                w0[offset + 2] = weight / 2
             elif name in ("p_old", "p_new"):
                 w0[offset + 2] = 1.0
             elif name == "qd_next":
                 w0[offset:offset + size] = self.exchange.velocity(boundary.q_t, boundary.xd_a)
+            elif name == "q_next":
+                w0[offset:offset + size] = self.exchange.configuration(boundary.q_t)
+            elif name == "xd_next":
+                w0[offset:offset + size] = boundary.xd_a
             elif name == "flow_end":
                 w0[offset:offset + size] = np.concatenate([boundary.q_t, boundary.xd_b[self.at]])
             if moving is not None and name in moving:
@@ -592,26 +667,30 @@ class LastingProgram:
             t = np.linspace(0.0, duration, n_points)
             x, xd, xdd = embed(out["q"]), embed(out["v"]), embed(out["a"])
             tau = out["tau"]
-            forces = np.stack([out["f_old"], out["f_new"]], axis=1)
+            reactions = np.stack([out["f_old"], out["f_new"]], axis=1)
+            forces, spin = reactions[..., :3], reactions[..., 3:]
             weights = np.array([1.0] + [4.0, 2.0] * (self.intervals - 1) + [4.0, 1.0]) * (duration / self.intervals) / 6
             l1 = float(weights @ np.abs(tau).sum(axis=1))
             l2 = float(weights @ (tau ** 2).sum(axis=1))
         else:
             t = np.zeros(0)
             x = xd = xdd = np.zeros((0, self.nx))
-            tau, forces = np.zeros((0, self.na)), np.zeros((0, 2, 3))
+            tau, forces, spin = np.zeros((0, self.na)), np.zeros((0, 2, 3)), np.zeros((0, 2, self.reaction_size - 3))
             l1 = l2 = 0.0
         none = np.zeros(self.na)
         i_minus, i_plus = out.get("i_minus", none).ravel(), out.get("i_plus", none).ravel()
-        held = np.stack([out["p_old"].ravel(), out["p_new"].ravel()]) if "p_old" in out else np.zeros((2, 3))
+        held = (np.stack([out["p_old"].ravel(), out["p_new"].ravel()]) if "p_old" in out
+                else np.zeros((2, self.reaction_size)))
         total = float(np.abs(i_minus).sum() + np.abs(i_plus).sum() + l1)
         success = bool(stats["success"])
         message = "solved" if success else (f"no {self.kind} double support of {duration:g} s: IPOPT "
                                             f"{stats['return_status']}; {self._worst(solution)}")
         next_start = out["qd_next"].ravel() if "qd_next" in out else None
         push_off = out["push_off"].ravel() if "push_off" in out else None
-        return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held, l1, l2,
-                              total, int(stats["iter_count"]), elapsed, next_start, push_off, solution)
+        spin_moments = None if self.lateral_free else (spin[..., 0], held[:, 3])
+        return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held[:, :3], l1,
+                              l2, total, int(stats["iter_count"]), elapsed, next_start, push_off, solution,
+                              spin_moments)
 
     def _worst(self, solution: dict) -> str:
         """What the last iterate violates most, in the constraints' words and units."""

@@ -46,6 +46,10 @@ class LastingSupport:
     next_start_velocity: np.ndarray | None = None  # periodic: the next step's qd(0) (its own coordinates, rad/s)
     push_off: np.ndarray | None = None  # periodic: the old tip's reaction impulse at I^+ (N s, world axes of the step's model)
     solution: dict | None = None  # the program's unknowns and multipliers, to warm-start a nearby solve
+    # With lateral hip joints: the ground's spin moments on the old and the new foot over the phase
+    # (n x 2, N m; the old about its shin, the new about the vertical, its heading's) and at the held
+    # impact (2, N m s).
+    spin_moments: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def peak_torque(self) -> np.ndarray:

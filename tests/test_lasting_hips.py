@@ -1,0 +1,120 @@
+"""The lasting double support with lateral hip joints (aoustin2013-hips, core/gait/lasting.py,
+docs/model.md section 14): the periodic cycle at d = 0.1 s checked through Pinocchio, the model's
+own leg exchange and the planner's flow, independently of the program's symbols; and the CLI."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from biped_gait.core.gait.lasting import LastingRequest
+from biped_gait.core.gait.lasting_support import IMPULSE_TIME
+from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.model.biped import STANCE_SPIN, BipedModel
+from biped_gait.core.model.exchange import MIRROR
+from biped_gait.core.model.mjcf import TORSIONAL_FRICTION
+
+DEFAULT = GaitRequest(0.45, 0.45, math.radians(23.5))
+SOLVER = 1e-6  # as tests/test_lasting.py: a thousand times IPOPT's 1e-9 in the unknowns' units
+STEP = 1e-6  # rad, m: the heading's central differences (their error about 1e-12 rad per unit)
+
+
+@pytest.fixture(scope="module")
+def planner() -> GaitPlanner:
+    return GaitPlanner("aoustin2013-hips", modes=("normal",))
+
+
+@pytest.fixture(scope="module")
+def gait(planner):
+    return planner.plan(DEFAULT)
+
+
+@pytest.fixture(scope="module")
+def cycle(planner, gait):
+    return planner.lasting.periodic(gait, LastingRequest.walkable(0.1))
+
+
+def _heading(bm: BipedModel, x: np.ndarray) -> float:
+    """The new stance shin's heading (rad) at X through Pinocchio: its mirror image's z angle in the
+    zxy decomposition (as ``KinematicExchange._landing``)."""
+    data = bm.double_support.createData()
+    pin.forwardKinematics(bm.double_support, data, x)
+    landing = MIRROR @ data.oMi[bm.double_support.getJointId(bm.names[bm.index("knee", "swing")])].rotation @ MIRROR
+    return math.atan2(-landing[0, 1], landing[1, 1])
+
+
+def _heading_row(bm: BipedModel, x: np.ndarray) -> np.ndarray:
+    eye = np.eye(len(x))
+    return np.array([(_heading(bm, x + STEP * e) - _heading(bm, x - STEP * e)) / (2 * STEP) for e in eye])
+
+
+def test_the_hips_cycle_holds_its_physics(planner, gait, cycle):
+    """At every sample: the double-support model's inverse dynamics (Pinocchio) equal the torques and
+    both feet's reactions, each a force at its tip and a spin moment (the old foot's on its spin
+    coordinate, the new one's on its heading), within 1e-6 of m g; the new tip held in x, y, z and
+    its heading; the old foot not spinning; both forces pressing within the friction pyramid (the
+    walkable margins: 50 N, mu - 0.1), both spin moments within the torsional friction (the held
+    impact's too); every torque within its limit."""
+    assert cycle.success, cycle.message
+    bm = planner.model
+    weight = bm.total_mass * bm.params.gravity
+    spin = bm.ds_names.index(STANCE_SPIN)
+    at = np.asarray(bm.ds_of_single)
+    q_t = gait.step.q_target
+    x_t = bm.ds_state(q_t)
+    tip, heading = bm.swing_tip(q_t), _heading(bm, x_t)
+    limits = np.array([bm.coordinates[k].spec.limits.effort for k in bm.actuated])
+    mu = bm.params.friction - 0.1
+    moments_old, moments_new = cycle.spin_moments[0][:, 0], cycle.spin_moments[0][:, 1]
+    assert len(cycle.t) >= 21 and cycle.t[-1] == pytest.approx(0.1)
+    for k, (x, xd, xdd, torque, forces) in enumerate(zip(cycle.x, cycle.xd, cycle.xdd, cycle.torques,
+                                                          cycle.contact_forces)):
+        assert x[spin] == 0.0 and xd[spin] == 0.0 and xdd[spin] == 0.0
+        generalized = pin.rnea(bm.double_support, bm.double_support_data, x, xd, xdd)
+        j1, j2 = bm.tip_jacobians(x[at])
+        applied = j1.T @ forces[0] + j2.T @ forces[1] + _heading_row(bm, x) * moments_new[k]
+        applied[spin] += moments_old[k]
+        applied[bm.ds_actuated] += torque
+        assert np.max(np.abs(generalized - applied)) < 1e-6 * weight
+        # Held at the acceleration: the rule's error (measured 2.6e-5 m and 3.5e-8 rad at most).
+        assert np.abs(bm.swing_tip(x[at]) - tip).max() < 1e-4
+        assert abs(_heading(bm, x) - heading) < 1e-6
+        assert np.all(forces[:, 2] >= 50.0 - SOLVER * weight)
+        assert np.all(np.hypot(forces[:, 0], forces[:, 1]) <= mu * forces[:, 2] + SOLVER * weight)
+        assert np.all(np.abs(torque) <= limits + SOLVER * 100)
+        spin_moments = np.array([moments_old[k], moments_new[k]])
+        assert np.all(np.abs(spin_moments) <= TORSIONAL_FRICTION * forces[:, 2] + SOLVER * weight)
+    assert cycle.friction_used <= mu + 1e-6
+    held = cycle.held_impact_impulses
+    assert np.all(np.abs(cycle.spin_moments[1]) <= TORSIONAL_FRICTION * held[:, 2] + SOLVER * weight * IMPULSE_TIME)
+
+
+def test_the_hips_cycle_is_periodic_and_straight(planner, gait, cycle):
+    """The next step, from the lift-off posture through the model's kinematic leg exchange and the
+    cycle's next start velocity, flown by the planner's shooting flow, lands on the touchdown
+    posture in T; the exchange turns the next step's frame by nothing (a straight walk), and the
+    velocity after I^+ is the exchange's image of the next start (the new tip at rest)."""
+    bm, exchange = planner.model, planner.hybrid.exchange
+    at = np.asarray(bm.ds_of_single)
+    q_lift = cycle.x[-1][at]
+    assert abs(exchange.heading(q_lift)) < 1e-6  # held at the acceleration: the rule's error (3e-8 measured)
+    res = planner.flow.propagate(exchange.configuration(q_lift), cycle.next_start_velocity, gait.problem.period)
+    assert np.max(np.abs(res.q - gait.step.q_target)) < 1e-7
+    assert np.max(np.abs(q_lift - gait.step.q_target)) > 1e-3  # the lift-off posture is not the touchdown's
+    _, j2 = bm.tip_jacobians(q_lift)
+    xd_a = exchange.next_velocity(q_lift, j2, cycle.next_start_velocity)
+    assert np.max(np.abs(j2 @ xd_a)) < 1e-7 and abs(exchange.spin_row(q_lift) @ xd_a) < 1e-7
+    assert np.max(np.abs(exchange.velocity(q_lift, xd_a) - cycle.next_start_velocity)) < 1e-7
+
+
+def test_the_plan_answers_for_the_hips():
+    """``biped-gait plan --double-support 0.1`` for the 13-joint set: the lasting cycle's summary."""
+    proc = subprocess.run([sys.executable, "-m", "biped_gait.cli", "plan", "--params", "aoustin2013-hips",
+                           "--double-support", "0.1"], capture_output=True, text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    assert "double support of 0.1 s: E = " in proc.stdout, proc.stdout
