@@ -23,6 +23,7 @@ from matplotlib.figure import Figure
 
 from ..core.model.biped import BipedModel
 from ..core.model.params import DEFAULT_PARAMS, load_params
+from .markdown import markdown_table
 from .figures import LINE_STYLES
 
 LASTING_STUDY = "lasting-study.json"  # beside the page
@@ -116,10 +117,6 @@ def _grid_minimum(rows: Sequence[dict], key: str) -> dict:
     return min(rows, key=lambda r: r[key])
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
-    return ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)] + ["| " + " | ".join(r) + " |" for r in rows]
-
-
 def _at_limit(study: LastingStudy, peaks: Sequence[float]) -> list[str]:
     return [name for name, peak, limit in zip(study.joints, peaks, study.effort_limits) if peak >= limit - AT_LIMIT]
 
@@ -149,7 +146,7 @@ def _durations_lines(study: LastingStudy) -> list[str]:
     lines = [f"The default gait (L = {first['L']:g} m, T = {first['T']:g} s, alpha = {first['alpha_deg']:g} deg, "
              f"{first['mode']} swing), its paper's W = {W:.2f} N m s (the instantaneous double support) and the limit "
              f"d -> 0+ E(0+) = {E0:.2f} N m s (the held touchdown between the two impulses):", ""]
-    lines += _table(header, table)
+    lines += markdown_table(header, table)
     lines += ["", f"*Reading.* The double support that lasts costs more than the paper's instantaneous one at every d "
               f"solved (E / W from {efforts[0] / W:.2f} to {efforts[-1] / W:.2f}) and "
               + ("more the longer it lasts" if grows else "not monotonically in d")
@@ -183,7 +180,7 @@ def _human_like_lines(study: LastingStudy) -> list[str]:
              "against the joint table's effort limit. The study stores each joint's peak only, not the torques' "
              "time history; the joints are named in the default set's actuated order (the file does not name them):",
              ""]
-    lines += _table(["joint", "peak torque (N m)", "effort limit (N m)", "of the limit"], table)
+    lines += markdown_table(["joint", "peak torque (N m)", "effort limit (N m)", "of the limit"], table)
     lines += ["", f"*Reading.* {len(at_limit)} of {len(study.joints)} joints reach their limit "
               f"({', '.join(at_limit) or 'none'}): the least-effort phase rides its torque bounds. "
               + (f"{', '.join(unused)} {'is' if len(unused) == 1 else 'are'} not used (peak below {AT_LIMIT:g} N m). "
@@ -241,10 +238,10 @@ def _arms_lines(study: LastingStudy) -> list[str]:
              f"swings, every {step:g} deg (N m s; bold: the least E of the row; a dash: the solve did not finish, "
              f"{failed} of {len(study.alphas)}, IPOPT stopping at its iteration limit). The impulsive rows are the "
              "same gaits' E(0+) and W (normal swing):", ""]
-    lines += _table(["swing, d", *(f"{a:g}" for a in alphas)], grid + impulsive)
+    lines += markdown_table(["swing, d", *(f"{a:g}" for a in alphas)], grid + impulsive)
     lines += ["", f"The optimal amplitude alpha* on this {step:g} deg grid, its E, and the saving against the arms "
               "still (alpha = 0, one gait for both swings):", ""]
-    lines += _table(["d (s)", "swing", "alpha* (deg)", "E at alpha*", "E, arms still", "saving (N m s)", "minimum"],
+    lines += markdown_table(["d (s)", "swing", "alpha* (deg)", "E at alpha*", "E, arms still", "saving (N m s)", "minimum"],
                     table)
     lines += ["", f"*Reading.* The normal swing's alpha* is {normal_alphas} deg at d = "
               f"{', '.join(f'{d:g}' for d in durations)} s ("

@@ -25,6 +25,7 @@ from ..core.model.params import DEFAULT_PARAMS, load_params
 from ..core.gait.planner import GaitPlanner, GaitRequest
 from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
+from .markdown import markdown_table
 from .human_walking import human_comparison
 from .maps import MAP_STRIDE, WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
 from ..core.gait.arm_optimum import ALPHA_RANGE, COARSE_STEP, ArmOptimum
@@ -146,11 +147,6 @@ def paper_claims(study: Study) -> list[Claim]:
     ]
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return lines + ["| " + " | ".join(row) + " |" for row in rows]
-
-
 def _effort_table(study: Study) -> list[str]:
     header = ["L (m)", "T (s)", "alpha* (deg)", "paper", "W normal", "paper", "W anti-normal at alpha*", "paper",
               "anti / normal", "paper", "theta (deg)", "least W is"]
@@ -167,7 +163,7 @@ def _effort_table(study: Study) -> list[str]:
             f"{c.other.W / c.optimum.W:.3f}", ratio_p, f"{math.degrees(c.optimum.gait.theta):.3f}",
             c.optimum.where,
         ])
-    return _table(header, rows)
+    return markdown_table(header, rows)
 
 
 def _momentum_table(study: Study) -> list[str]:
@@ -179,7 +175,7 @@ def _momentum_table(study: Study) -> list[str]:
         rows.append([f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.optimum.alpha):.2f}",
                      f"{n.double_support.h_t_minus[0]:.3f}", f"{a.double_support.h_t_minus[0]:.3f}", f"{n.double_support.h_t_plus[1]:.3f}", f"{a.double_support.h_t_plus[1]:.3f}",
                      f"{n.double_support.yaw_momentum_jump:.3f}", f"{a.double_support.yaw_momentum_jump:.3f}"])
-    return _table(header, rows)
+    return markdown_table(header, rows)
 
 
 def _reference_table(references: dict[str, Reference]) -> list[str]:
@@ -193,7 +189,7 @@ def _reference_table(references: dict[str, Reference]) -> list[str]:
     for mode, value in PAPER_JUMP.items():
         gaits = [ref.normal if mode == "normal" else ref.anti_normal for ref in references.values()]
         rows.append([PAPER_JUMP_ROW, mode, f"{value:.2f}"] + [f"{paper_momentum_jump(g):.3f}" for g in gaits])
-    return _table(header, rows)
+    return markdown_table(header, rows)
 
 
 def _claims_section(studies: Sequence[Study]) -> list[str]:
