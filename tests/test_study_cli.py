@@ -7,6 +7,7 @@ import csv
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import time
@@ -14,6 +15,7 @@ import time
 import pytest
 
 from .test_cli import ENTRY, run
+from .test_lasting_page import STORED as LASTING_STUDY, check_lasting_section
 
 pytestmark = pytest.mark.studies
 
@@ -144,8 +146,10 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     """Every section and figure of the page, on coarse spacings (the arm amplitudes; the walk's
     closed loops and pushes at alpha 0 only, and alpha*; the maps' optima on one atlas node in 4
     along L and T) and a part of the pulses and push directions (docs/results.md is made with the
-    finer defaults)."""
+    finer defaults); the lasting double support's section from the stored study, copied beside the page."""
     page = tmp_path / "docs" / "results.md"
+    page.parent.mkdir()
+    shutil.copy(LASTING_STUDY, page.parent)
     proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "90", "--workers", "2",
                "--pulse-durations", "5", "--push-directions", "left", "right", "--map-stride", "4", timeout=280)
     assert proc.returncode == 0, proc.stderr
@@ -156,12 +160,14 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
                     "## Where walking is possible (maps beyond the paper)", "## Stability of the gaits (beyond the paper)",
                     "## The physics a reviewer would check (beyond the paper)", "### Beside human walking",
                     "## The walk: stability, pushes, commanded speed", "## Walking on circles (beyond the paper)",
-                    "## A double support that lasts, walked in MuJoCo (beyond the paper)"):
+                    "## A double support that lasts, walked in MuJoCo (beyond the paper)",
+                    "## A double support that lasts: its effort and the arms' optimum (beyond the paper)"):
         assert heading in text
+    check_lasting_section(text, json.loads(LASTING_STUDY.read_text()))
     links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
     assert links[:3] == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
     assert {"map-region-aoustin2013.png", "map-optimum-aoustin2013-table.png", "stability.png",
-            "rate-bound.png"} <= set(links)
+            "rate-bound.png", "lasting-effort.png", "lasting-arms.png"} <= set(links)
     assert all((page.parent / link).read_bytes()[:8] == PNG_SIGNATURE for link in links)
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text

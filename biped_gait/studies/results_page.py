@@ -2,7 +2,8 @@
 the default parameter set and the paper's table verbatim, with its figures, the paper's
 claims checked on the computed numbers, and where the project and the paper differ,
 written from the computed evidence; then the maps of where walking is possible and the walk
-beyond the paper (stability, pushes, commanded speed: ``walking_page``).
+beyond the paper (stability, pushes, commanded speed: ``walking_page``), and the double support
+that lasts, read from its stored study beside the page (``lasting_page``).
 
 Everything on the page is computed when it is generated (``biped-gait results-page``); only
 the paper's own numbers are constants here. W in N m s, angular momentum in kg m^2/s,
@@ -14,7 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from concurrent.futures import Executor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from ..core.gait.atlas import Atlas, atlas_path
@@ -24,6 +25,7 @@ from ..core.model.params import DEFAULT_PARAMS, load_params
 from ..core.gait.planner import GaitPlanner, GaitRequest
 from .effort_checks import effort_readings, rate_bound_curve, rate_bound_figure
 from .figures import save
+from .markdown import markdown_table
 from .human_walking import human_comparison
 from .maps import MAP_STRIDE, WalkingMaps, compute_maps, file_suffix, optimum_figure, ratio_figure, reading, region_figure, stability_figure
 from ..core.gait.arm_optimum import ALPHA_RANGE, COARSE_STEP, ArmOptimum
@@ -31,6 +33,7 @@ from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
 from .hips_page import HIPS_PARAMS, hips_lines, hips_study
+from .lasting_page import LASTING_STUDY, LastingStudy, lasting_figures, lasting_lines
 from .mujoco_pulses import DURATIONS as PULSE_DURATIONS, PulseRow, pulse_lines, pulse_rows
 from .turning_page import FIGURE as TURNING_FIGURE, Turning, turning_figure, turning_lines, turning_study
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
@@ -144,11 +147,6 @@ def paper_claims(study: Study) -> list[Claim]:
     ]
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
-    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-    return lines + ["| " + " | ".join(row) + " |" for row in rows]
-
-
 def _effort_table(study: Study) -> list[str]:
     header = ["L (m)", "T (s)", "alpha* (deg)", "paper", "W normal", "paper", "W anti-normal at alpha*", "paper",
               "anti / normal", "paper", "theta (deg)", "least W is"]
@@ -165,7 +163,7 @@ def _effort_table(study: Study) -> list[str]:
             f"{c.other.W / c.optimum.W:.3f}", ratio_p, f"{math.degrees(c.optimum.gait.theta):.3f}",
             c.optimum.where,
         ])
-    return _table(header, rows)
+    return markdown_table(header, rows)
 
 
 def _momentum_table(study: Study) -> list[str]:
@@ -177,7 +175,7 @@ def _momentum_table(study: Study) -> list[str]:
         rows.append([f"{case[0]:.2f}", f"{case[1]:.2f}", f"{math.degrees(c.optimum.alpha):.2f}",
                      f"{n.double_support.h_t_minus[0]:.3f}", f"{a.double_support.h_t_minus[0]:.3f}", f"{n.double_support.h_t_plus[1]:.3f}", f"{a.double_support.h_t_plus[1]:.3f}",
                      f"{n.double_support.yaw_momentum_jump:.3f}", f"{a.double_support.yaw_momentum_jump:.3f}"])
-    return _table(header, rows)
+    return markdown_table(header, rows)
 
 
 def _reference_table(references: dict[str, Reference]) -> list[str]:
@@ -191,7 +189,7 @@ def _reference_table(references: dict[str, Reference]) -> list[str]:
     for mode, value in PAPER_JUMP.items():
         gaits = [ref.normal if mode == "normal" else ref.anti_normal for ref in references.values()]
         rows.append([PAPER_JUMP_ROW, mode, f"{value:.2f}"] + [f"{paper_momentum_jump(g):.3f}" for g in gaits])
-    return _table(header, rows)
+    return markdown_table(header, rows)
 
 
 def _claims_section(studies: Sequence[Study]) -> list[str]:
@@ -376,6 +374,8 @@ class Extensions:
     hips: Study | None = None
     turning: Turning | None = None
     pulses: Sequence[PulseRow] = ()
+    lasting: LastingStudy | None = None
+    lasting_path: Path | None = None  # where the lasting study was looked for (None: no such section)
 
 
 STABILITY_FIGURE = "stability.png"
@@ -410,7 +410,7 @@ def render(
         "",
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-              if not path.startswith(("map-", "walk-", f"fig4-{HIPS_PARAMS}"))
+              if not path.startswith(("map-", "walk-", "lasting-", f"fig4-{HIPS_PARAMS}"))
               and path not in (STABILITY_FIGURE, RATE_FIGURE, TURNING_FIGURE)]
     for study in studies:
         label = " (default)" if study is default else ""
@@ -444,6 +444,9 @@ def render(
                   "rotation of 2 L / R (docs/model.md sections 3.1 and 4.9), planned like the straight gait and walked "
                   "by the simulator (`-p turn_radius:=R`, or `/cmd_vel` angular.z).", ""]
         lines += turning_lines(extensions.turning)
+    if extensions.lasting_path is not None:
+        lines += ["", "## A double support that lasts: its effort and the arms' optimum (beyond the paper)", ""]
+        lines += lasting_lines(extensions.lasting, extensions.lasting_path)
     if extensions.pulses:
         lines += ["", "## A double support that lasts, walked in MuJoCo (beyond the paper)", "",
                   "The paper's caveat: impulsive torques cannot be realized. In MuJoCo (`engine:=mujoco`, docs/model.md "
@@ -483,7 +486,8 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     ``walk_alpha_step`` (rad): the alpha spacing of the walk section's closed loops and pushes;
     ``pulse_durations`` (s): the double supports walked in MuJoCo (none: no such section);
     ``push_directions``: the walk section's push directions (names of ``push_study.STUDY_DIRECTIONS``);
-    ``map_stride``: the maps' optima on one atlas node in ``map_stride`` along L and T."""
+    ``map_stride``: the maps' optima on one atlas node in ``map_stride`` along L and T. The lasting
+    double support's section reads ``LASTING_STUDY`` beside ``out`` (absent: the page says so)."""
     out = Path(out)
     studies = run_study(executor, [load_params(n) for n in PARAMETER_SETS], TABLE_CASES, coarse_step=coarse_step)
     references = {n: Reference.compute(n) for n in PARAMETER_SETS}
@@ -508,6 +512,10 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     figures[f"Fig. 4, parameter set {extensions.hips.params.name}"] = (extensions.hips.fig4(),
                                                                     f"fig4-{extensions.hips.params.name}.png")
     figures["Effort per metre against the turn radius"] = (turning_figure(extensions.turning), TURNING_FIGURE)
+    lasting_path = out.parent / LASTING_STUDY
+    lasting = LastingStudy.load(lasting_path) if lasting_path.is_file() else None
+    extensions = replace(extensions, lasting=lasting, lasting_path=lasting_path)
+    figures.update(lasting_figures(lasting))
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, extensions))
