@@ -232,7 +232,7 @@ def double_support(mass_matrix: np.ndarray, j1: np.ndarray, j2: np.ndarray, xd_b
     """Xd^a (double-support coordinates) after eqs. (6)-(10) run forward from ``xd_b`` as three
     impacts (``ImpactMap.forward``): I^- (N m s) with the old stance tip (``j1``) keeping its
     velocity, the passive impact and I^+ with the new one (``j2``) at rest. The arguments are
-    ``impact_with``'s: one double support, or stacks of them."""
+    ``impact_with``'s."""
     rows = layout.joints
     xd_minus = impact_with(mass_matrix, j1, xd_b, i_minus, rows, at_rest=False)
     xd_plus = impact_with(mass_matrix, j2, xd_minus, np.zeros(layout.na), rows, at_rest=True)
@@ -244,25 +244,21 @@ def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, jo
     """The double-support velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R
     with the contact of ``contact`` (J, c x nX) at rest after it (``at_rest``) or keeping its
     velocity (J Xd' = J Xd); ``joint_impulse`` I on the actuated coordinates, rows ``rows`` of X
-    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each); with
-    stacks of s double supports (``mass_matrix`` s x nX x nX, ``contact`` s x c x nX), ``xd`` is
-    s x nX, a velocity for each (the linear systems solved together: the same numbers as one by
-    one)."""
-    n, c = mass_matrix.shape[-1], contact.shape[-2]
-    stacked = mass_matrix.ndim == 3
-    if stacked:
-        xd = xd[..., None]
-    kkt = np.zeros(mass_matrix.shape[:-2] + (n + c, n + c))
-    kkt[..., :n, :n], kkt[..., :n, n:], kkt[..., n:, :n] = mass_matrix, -np.swapaxes(contact, -1, -2), contact
-    moved = mass_matrix @ xd
-    held = np.zeros(moved.shape[:-2] + (c,) + moved.shape[-1:] if moved.ndim > 1 else (c,)) if at_rest else contact @ xd
-    rhs = np.concatenate([moved, held], axis=0 if xd.ndim == 1 else -2)
-    if xd.ndim == 1:
-        rhs[rows] += joint_impulse
-    else:
-        rhs[..., rows, :] += joint_impulse[:, None]
-    solved = np.linalg.solve(kkt, rhs)[..., :n, :] if xd.ndim > 1 else np.linalg.solve(kkt, rhs)[:n]
-    return solved[..., 0] if stacked else solved
+    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each)."""
+    kkt, rhs = _impact_system(mass_matrix, contact, xd, joint_impulse, rows, at_rest)
+    return np.linalg.solve(kkt, rhs)[: mass_matrix.shape[0]]
+
+
+def _impact_system(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, joint_impulse: np.ndarray,
+                   rows: np.ndarray | slice, at_rest: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``impact_with``'s linear system [D_e, -J^T; J, 0] [Xd'; I_R] = [D_e Xd + B_e I; J Xd or 0]."""
+    n, c = mass_matrix.shape[0], contact.shape[0]
+    kkt = np.zeros((n + c, n + c))
+    kkt[:n, :n], kkt[:n, n:], kkt[n:, :n] = mass_matrix, -contact.T, contact
+    held = np.zeros((c,) + xd.shape[1:]) if at_rest else contact @ xd
+    rhs = np.concatenate([mass_matrix @ xd, held])
+    rhs[rows] += joint_impulse if xd.ndim == 1 else joint_impulse[:, None]
+    return kkt, rhs
 
 
 def impact_sensitivity(mass_matrix: np.ndarray, d_mass: np.ndarray, contact: np.ndarray, d_contact: np.ndarray,
@@ -274,11 +270,8 @@ def impact_sensitivity(mass_matrix: np.ndarray, d_mass: np.ndarray, contact: np.
     [D_e, -J^T; J, 0] [Xd'; I_R] = [D_e Xd + B_e I; J Xd or 0] gives the same matrix on the right-hand
     side D_e' (Xd - Xd') + J'^T I_R + D_e dXd over J' (Xd - Xd') + J dXd (the contact keeping its
     velocity) or -J' Xd' (at rest). Returns Xd' (nX,) and its derivative (nX x k)."""
-    n, c = mass_matrix.shape[0], contact.shape[0]
-    kkt = np.zeros((n + c, n + c))
-    kkt[:n, :n], kkt[:n, n:], kkt[n:, :n] = mass_matrix, -contact.T, contact
-    rhs = np.concatenate([mass_matrix @ xd, np.zeros(c) if at_rest else contact @ xd])
-    rhs[rows] += joint_impulse
+    n = mass_matrix.shape[0]
+    kkt, rhs = _impact_system(mass_matrix, contact, xd, joint_impulse, rows, at_rest)
     solved = np.linalg.solve(kkt, rhs)
     after, reaction = solved[:n], solved[n:]
     top = np.einsum("kij,j->ik", d_mass, xd - after) + np.einsum("kci,c->ik", d_contact, reaction) + mass_matrix @ d_xd
