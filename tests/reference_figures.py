@@ -63,10 +63,10 @@ WALK_RATE = 200.0  # samples per second of the stored walk
 # (measured on the 10 stored plans, the walk and the sweep). 1e-9 leaves room for both and still
 # catches a change of the model, of a limit or of the solution branch.
 FIGURE = 1e-9
-# The leading Floquet multipliers are known to a few parts in 1e9 and the reset's Jacobian to
-# about 1e-8 of its largest entry (central differences of the impact map amplified by the flow,
-# docs/model.md section 8.9), so every multiplier to about 1e-8 of the spectral radius (measured:
-# a few ulps in the request move them by up to 7e-9 of it). Ten times those.
+# The stored multipliers were computed with the reset's Jacobian by central differences, which knew
+# every multiplier to about 1e-8 of the spectral radius (measured: a few ulps in the request moved
+# them by up to 7e-9 of it); the analytic Jacobian (docs/model.md section 8.9) is within that of
+# them. Ten times those.
 MULTIPLIER = 1e-7  # of the spectral radius, every multiplier
 SPECTRAL_RADIUS = 5e-8  # of itself
 # A touchdown instant is known to about 1e-12 s (the guard's root on the RK8 interpolant, the

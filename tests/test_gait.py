@@ -16,6 +16,7 @@ from biped_gait.core.gait.configurations import GaitMode
 from biped_gait.core.gait.bvp import StepProblem, solve_bvp
 from biped_gait.core.dynamics.settings import DEFAULTS
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
+from biped_gait.core.dynamics import impulses
 from biped_gait.core.dynamics.impulses import solve_impulses
 from biped_gait.core.gait.figures import ground_reaction_momentum
 from biped_gait.core.dynamics.samples import ground_reaction_inverse_dynamics
@@ -98,15 +99,36 @@ def test_lp_started_from_a_nearby_basis_finds_the_same_optimum(planner, default_
     gait's optimal basis: the same optimum as started cold (W and the impulses to rounding), and
     the basis it ends on is the cold start's."""
     near = planner.plan(dataclasses.replace(DEFAULT_REQUEST, arm_amplitude=DEFAULT_REQUEST.arm_amplitude + math.radians(2)))
-    problem = impact_problem(planner, near)
-    cold = solve_impulses(problem, "l1")
-    warm = solve_impulses(problem, "l1", start=default_gait.double_support.impulses.basis)
+    problem, options = impact_problem(planner, near), near.problem.impulse_options
+    cold = solve_impulses(problem, "l1", options)
+    warm = solve_impulses(problem, "l1", options, start=default_gait.double_support.impulses.basis)
     assert cold.success and warm.success and warm.duality_gap < 1e-9
     assert warm.W == pytest.approx(cold.W, rel=1e-12)
     assert np.max(np.abs(warm.x - cold.x)) <= 1e-12 * np.max(np.abs(cold.x))
     assert all(np.array_equal(a, b) for a, b in zip(warm.basis, cold.basis))
     other_shape = tuple(status[:-1] for status in default_gait.double_support.impulses.basis)
-    assert solve_impulses(problem, "l1", start=other_shape).W == pytest.approx(cold.W, rel=1e-12)  # ignored
+    assert solve_impulses(problem, "l1", options, start=other_shape).W == pytest.approx(cold.W, rel=1e-12)  # ignored
+
+
+def test_an_lp_on_an_optimal_basis_is_certified_without_the_simplex(planner, default_gait):
+    """Started from a basis, the LP is solved on it by one linear system when the basis is optimal
+    there (its solution feasible and its multipliers of an optimum's signs, ``impulses._on_basis``):
+    at the gait's own double support that is HiGHS's optimum to rounding (1e-12), certified to
+    ``CERTIFIED``. A far gait's basis (alpha 5 deg, 40 deg, the other mode) is refused there, and
+    HiGHS, started from it, finds the optimum of a cold start."""
+    problem = impact_problem(planner, default_gait)
+    basis = default_gait.double_support.impulses.basis
+    options = default_gait.problem.impulse_options  # the friction cone's
+    lp = impulses._l1_program(problem, problem.equations(), options)
+    x, gap = impulses._on_basis(lp, basis)
+    cold = solve_impulses(problem, "l1", options)
+    assert gap <= impulses.CERTIFIED
+    assert np.max(np.abs(x[: problem.layout.unknowns] - cold.x)) <= 1e-12 * np.max(np.abs(cold.x))
+    for alpha, mode in ((5.0, "normal"), (40.0, "normal"), (23.5, "anti-normal")):
+        far = impact_problem(planner, planner.plan(GaitRequest(0.45, 0.45, math.radians(alpha), mode)))
+        assert impulses._on_basis(impulses._l1_program(far, far.equations(), options), basis) is None
+        warm, cold = solve_impulses(far, "l1", options, start=basis), solve_impulses(far, "l1", options)
+        assert warm.success and warm.W == pytest.approx(cold.W, rel=1e-12)
 
 
 def test_a_gait_without_samples_keeps_its_figures_not_its_grids(default_gait):

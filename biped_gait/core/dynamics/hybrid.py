@@ -181,6 +181,31 @@ class ImpactMap:
         xd_a = double_support(self.mass_matrix, self.j1, self.j2, xd_b, i_minus, i_plus, self.layout)
         return self.exchange.velocity(self.q_t, xd_a)
 
+    def reset_jacobian(self, qd_b: np.ndarray, i_minus: np.ndarray, i_plus: np.ndarray) -> np.ndarray:
+        """d (q', qd') / d (q, qd) (2 nq x 2 nq) of the reset (``forward`` and the exchange's
+        ``configuration``) at this configuration and the pre-impact velocity ``qd_b``, the impulses
+        held fixed: the velocity part exactly (the reset is linear in it), the configuration part
+        differentiated analytically through the three impacts' linear systems (``impact_sensitivity``)
+        with D_e's, J1's, J2's and the exchange's derivatives (``BipedModel.derivatives``,
+        ``derivatives`` of the exchange)."""
+        bm, n = self.bm, self.bm.nq
+        d_mass, d_j1, d_j2 = bm.derivatives(self.q_t)
+        configuration, d_velocity, d_spin = self.exchange.derivatives(self.q_t)
+        if bm.spin:
+            d_j1 = np.concatenate([d_j1, np.zeros((n, 1, d_j1.shape[2]))], axis=1)
+            d_j2 = np.concatenate([d_j2, d_spin[:, None]], axis=1)
+        rows, zero = self.layout.joints, np.zeros(self.layout.na)
+        xd, d_xd = bm.embed(qd_b), np.zeros((bm.double_support.nv, n))
+        for contact, d_contact, impulse, at_rest in ((self.j1, d_j1, i_minus, False), (self.j2, d_j2, zero, True),
+                                                     (self.j2, d_j2, i_plus, True)):
+            xd, d_xd = impact_sensitivity(self.mass_matrix, d_mass, contact, d_contact, xd, d_xd, impulse, rows,
+                                          at_rest)
+        out = np.zeros((2 * n, 2 * n))
+        out[:n, :n] = configuration
+        out[n:, :n] = self.exchange.velocity(self.q_t, d_xd) + np.einsum("kij,j->ik", d_velocity, xd)
+        out[n:, n:] = self.forward(np.eye(n), zero, zero)
+        return out
+
     def closure_gradients(self) -> tuple[np.ndarray, np.ndarray]:
         """d gap / d qd_a (in the next step's coordinates) and d gap / d qd_b, at this
         configuration (the gap is linear in both)."""
@@ -207,7 +232,7 @@ def double_support(mass_matrix: np.ndarray, j1: np.ndarray, j2: np.ndarray, xd_b
     """Xd^a (double-support coordinates) after eqs. (6)-(10) run forward from ``xd_b`` as three
     impacts (``ImpactMap.forward``): I^- (N m s) with the old stance tip (``j1``) keeping its
     velocity, the passive impact and I^+ with the new one (``j2``) at rest. The arguments are
-    ``impact_with``'s: one double support, or stacks of them."""
+    ``impact_with``'s."""
     rows = layout.joints
     xd_minus = impact_with(mass_matrix, j1, xd_b, i_minus, rows, at_rest=False)
     xd_plus = impact_with(mass_matrix, j2, xd_minus, np.zeros(layout.na), rows, at_rest=True)
@@ -219,25 +244,42 @@ def impact_with(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, jo
     """The double-support velocity after one impulsive sub-phase: D_e (Xd' - Xd) = B_e I + J^T I_R
     with the contact of ``contact`` (J, c x nX) at rest after it (``at_rest``) or keeping its
     velocity (J Xd' = J Xd); ``joint_impulse`` I on the actuated coordinates, rows ``rows`` of X
-    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each); with
-    stacks of s double supports (``mass_matrix`` s x nX x nX, ``contact`` s x c x nX), ``xd`` is
-    s x nX, a velocity for each (the linear systems solved together: the same numbers as one by
-    one)."""
-    n, c = mass_matrix.shape[-1], contact.shape[-2]
-    stacked = mass_matrix.ndim == 3
-    if stacked:
-        xd = xd[..., None]
-    kkt = np.zeros(mass_matrix.shape[:-2] + (n + c, n + c))
-    kkt[..., :n, :n], kkt[..., :n, n:], kkt[..., n:, :n] = mass_matrix, -np.swapaxes(contact, -1, -2), contact
-    moved = mass_matrix @ xd
-    held = np.zeros(moved.shape[:-2] + (c,) + moved.shape[-1:] if moved.ndim > 1 else (c,)) if at_rest else contact @ xd
-    rhs = np.concatenate([moved, held], axis=0 if xd.ndim == 1 else -2)
-    if xd.ndim == 1:
-        rhs[rows] += joint_impulse
+    (N m s). ``xd`` may be nX x k (k velocities as columns, the same impulse added to each)."""
+    kkt, rhs = _impact_system(mass_matrix, contact, xd, joint_impulse, rows, at_rest)
+    return np.linalg.solve(kkt, rhs)[: mass_matrix.shape[0]]
+
+
+def _impact_system(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray, joint_impulse: np.ndarray,
+                   rows: np.ndarray | slice, at_rest: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``impact_with``'s linear system [D_e, -J^T; J, 0] [Xd'; I_R] = [D_e Xd + B_e I; J Xd or 0]."""
+    n, c = mass_matrix.shape[0], contact.shape[0]
+    kkt = np.zeros((n + c, n + c))
+    kkt[:n, :n], kkt[:n, n:], kkt[n:, :n] = mass_matrix, -contact.T, contact
+    held = np.zeros((c,) + xd.shape[1:]) if at_rest else contact @ xd
+    rhs = np.concatenate([mass_matrix @ xd, held])
+    rhs[rows] += joint_impulse if xd.ndim == 1 else joint_impulse[:, None]
+    return kkt, rhs
+
+
+def impact_sensitivity(mass_matrix: np.ndarray, d_mass: np.ndarray, contact: np.ndarray, d_contact: np.ndarray,
+                       xd: np.ndarray, d_xd: np.ndarray, joint_impulse: np.ndarray, rows: np.ndarray | slice,
+                       at_rest: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``impact_with`` for one double support (``xd`` nX,) and the derivative of its result along
+    k parameters: ``d_mass`` (k x nX x nX) and ``d_contact`` (k x c x nX) those of D_e and J, ``d_xd``
+    (nX x k) that of ``xd``, the joint impulse held. Differentiating the system
+    [D_e, -J^T; J, 0] [Xd'; I_R] = [D_e Xd + B_e I; J Xd or 0] gives the same matrix on the right-hand
+    side D_e' (Xd - Xd') + J'^T I_R + D_e dXd over J' (Xd - Xd') + J dXd (the contact keeping its
+    velocity) or -J' Xd' (at rest). Returns Xd' (nX,) and its derivative (nX x k)."""
+    n = mass_matrix.shape[0]
+    kkt, rhs = _impact_system(mass_matrix, contact, xd, joint_impulse, rows, at_rest)
+    solved = np.linalg.solve(kkt, rhs)
+    after, reaction = solved[:n], solved[n:]
+    top = np.einsum("kij,j->ik", d_mass, xd - after) + np.einsum("kci,c->ik", d_contact, reaction) + mass_matrix @ d_xd
+    if at_rest:
+        bottom = -np.einsum("kcj,j->ck", d_contact, after)
     else:
-        rhs[..., rows, :] += joint_impulse[:, None]
-    solved = np.linalg.solve(kkt, rhs)[..., :n, :] if xd.ndim > 1 else np.linalg.solve(kkt, rhs)[:n]
-    return solved[..., 0] if stacked else solved
+        bottom = np.einsum("kcj,j->ck", d_contact, xd - after) + contact @ d_xd
+    return after, np.linalg.solve(kkt, np.vstack([top, bottom]))[:n]
 
 
 @dataclass(frozen=True, eq=False)
@@ -284,15 +326,3 @@ class HybridStep:
     def impact(self, q_t: np.ndarray) -> ImpactMap:
         """The reset's double support at touchdown configuration ``q_t``."""
         return ImpactMap(self.bm, self.exchange, q_t)
-
-    def forward_at(self, configurations: np.ndarray, qd_b: np.ndarray, i_minus: np.ndarray,
-                   i_plus: np.ndarray) -> np.ndarray:
-        """``impact(q).forward(qd_b, i_minus, i_plus)`` for each touchdown configuration q, the
-        rows of ``configurations`` (k x nq, rad): the next step's initial joint velocities (rad/s,
-        k x nq), the k double supports' linear systems solved together (the same numbers)."""
-        bm = self.bm
-        mass = np.array([bm.mass_matrix(q) for q in configurations])
-        j1, j2 = (np.array(j) for j in zip(*(contact_jacobians(bm, self.exchange, q) for q in configurations)))
-        xd_b = np.broadcast_to(bm.embed(qd_b), (len(configurations), bm.double_support.nv))
-        xd_a = double_support(mass, j1, j2, xd_b, i_minus, i_plus, ImpactLayout.of(bm))
-        return np.array([self.exchange.velocity(q, xd) for q, xd in zip(configurations, xd_a)])

@@ -10,8 +10,8 @@ The gait's start x* is a fixed point, P(x*) = x*.
 Its Jacobian at x* composes, exactly: the flow's sensitivity Phi = d x(T) / d x(0) from the
 variational equations (the BVP's RK8 grid), the guard's saltation (the touchdown time moves by
 d tau = -(grad w . dq(T)) / (grad w . qd(T))), and the reset's derivative (linear in the
-velocity; its configuration dependence through D_e, J1, J2 by central differences, an
-algebraic map). The multipliers are its eigenvalues; the gait is open-loop stable if all lie
+velocity; its configuration dependence through D_e, J1, J2 and the leg exchange differentiated
+analytically, ``ImpactMap.reset_jacobian``). The multipliers are its eigenvalues; the gait is open-loop stable if all lie
 inside the unit circle. One of the 2 nq is zero by construction (a perturbation along the flow
 reaches the same touchdown: the guard removes it); the rest describe how a small perturbation
 grows or decays from one step to the next.
@@ -25,8 +25,6 @@ import numpy as np
 
 from ..dynamics.flow import BallisticFlow, FlowResult
 from ..dynamics.hybrid import HybridStep
-
-FD_STEP = 1e-6  # rad: central differences of the reset's configuration dependence
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,22 +94,7 @@ class PoincareMap:
         grad = bm.tip_jacobians(q)[1][2, bm.ds_of_single]  # d w / d q (m/rad)
         dtau = -(grad @ phi[:n]) / (grad @ qd)  # d tau / d x (s per unit of x)
         pre = phi + np.outer(np.concatenate([qd, qdd]), dtau)  # d x(tau) / d x(0)
-        return self._reset_jacobian(q, qd) @ pre
-
-    def _reset_jacobian(self, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """d reset / d (q, qd) (2 nq x 2 nq) at the pre-impact state (q, qd) (rad, rad/s): the
-        velocity part exactly (the reset is linear in qd), the configuration part by central
-        differences (the 2 nq double supports solved together)."""
-        n, na = len(q), len(self.i_minus)
-        out = np.zeros((2 * n, 2 * n))
-        out[n:, n:] = self.hybrid.impact(q).forward(np.eye(n), np.zeros(na), np.zeros(na))
-        steps = FD_STEP * np.eye(n)
-        moved = np.concatenate([q + steps, q - steps])  # q + h e_j, then q - h e_j (rows)
-        exchange = self.hybrid.exchange
-        resets = np.hstack([[exchange.configuration(c) for c in moved],
-                            self.hybrid.forward_at(moved, qd, self.i_minus, self.i_plus)])
-        out[:, :n] = ((resets[:n] - resets[n:]) / (2 * FD_STEP)).T
-        return out
+        return self.hybrid.impact(q).reset_jacobian(qd, self.i_minus, self.i_plus) @ pre
 
 
 def variational_flow(flow: BallisticFlow, period: float, q0: np.ndarray, qd0: np.ndarray) -> FlowResult:

@@ -246,6 +246,28 @@ class BipedModel:
         j2 = pin.getFrameJacobian(model, data, model.getFrameId(SWING_TIP), frame)[:3]
         return j1, j2
 
+    def derivatives(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """dD_e/dq_k, dJ1/dq_k, dJ2/dq_k for each single-support coordinate q_k (k first: nq x nX
+        x nX, nq x 3 x nX twice), exact: dD_e/dX_k = C(X, e_k) + C(X, e_k)^T (Pinocchio's Coriolis
+        matrix, whose C + C^T is dD_e/dt), and the tips' Jacobians' time variation at the unit
+        rate of X_k (the tips' positions' second derivatives)."""
+        model, data = self.double_support, self.double_support_data
+        x = self.ds_state(q)
+        frame = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        tips = model.getFrameId(STANCE_TIP), model.getFrameId(SWING_TIP)
+        d_mass = np.empty((self.nq, model.nv, model.nv))
+        d_tips = np.empty((2, self.nq, 3, model.nv))
+        for k, column in enumerate(self.ds_of_single):
+            rate = np.zeros(model.nv)
+            rate[column] = 1.0
+            coriolis = pin.computeCoriolisMatrix(model, data, x, rate)
+            d_mass[k] = coriolis + coriolis.T
+            pin.computeJointJacobiansTimeVariation(model, data, x, rate)
+            pin.updateFramePlacements(model, data)
+            for tip, frame_id in enumerate(tips):
+                d_tips[tip, k] = pin.getFrameJacobianTimeVariation(model, data, frame_id, frame)[:3]
+        return d_mass, d_tips[0], d_tips[1]
+
     def momentum(self, q: np.ndarray, xd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Linear momentum p (kg m/s), angular momentum about the world origin (kg m^2/s), CoM (m).
 

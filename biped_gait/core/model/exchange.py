@@ -135,6 +135,11 @@ class LinearExchange:
         from the old foot's, which the model holds."""
         return None
 
+    def derivatives(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, None]:
+        """The exchange's dependence on the touchdown configuration ``q`` (``KinematicExchange``'s):
+        dq'/dq = P, the velocity map's none, no spin row."""
+        return self.matrix, np.zeros((len(q), len(q), len(q) + 3)), None
+
 
 def _gimbal(roll: float, pitch: float) -> np.ndarray:
     """The angular velocity (columns, foot frame) of unit rates of a stance ankle's roll, pitch
@@ -203,6 +208,45 @@ class KinematicExchange:
         """The new stance foot's spin rate (rad/s, about its shin) as a row over X: zero after
         the impact, as the next step's ankle has no spin."""
         return self._resolution(q)[2] @ self._shin_angular(q)
+
+    def derivatives(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The exchange's dependence on the touchdown configuration ``q`` (rad), exact: dq'/dq (nq x
+        nq); d V / dq_k (nq x nq x nX, k first), V the matrix of ``velocity`` (qd' = V(q) Xd); and
+        d ``spin_row`` / dq_k (nq x nX). The landing shin's orientation moves at the mirrored
+        angular velocity -M w_k per unit rate of q_k (w_k its world angular velocity's column),
+        which its Euler angles' rates resolve; the shin's angular Jacobian's derivative is its
+        time variation at that unit rate."""
+        bm = self.bm
+        model, data = bm.double_support, self.ds_data
+        x, frame = bm.ds_state(q), pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        angular = self._shin_angular(q)
+        d_angular = np.empty((bm.nq, 3, model.nv))
+        for k, column in enumerate(bm.ds_of_single):
+            rate = np.zeros(model.nv)
+            rate[column] = 1.0
+            pin.computeJointJacobiansTimeVariation(model, data, x, rate)
+            d_angular[k] = pin.getJointJacobianTimeVariation(model, data, self.ds_shin, frame)[3:]
+        phi, roll, pitch = self._landing(q)
+        turn = rotation("z", phi)
+        axes = np.column_stack([[0.0, 0.0, 1.0], turn[:, 0], turn @ rotation("x", roll)[:, 1]])
+        rates = np.linalg.solve(axes, -MIRROR @ angular[:, bm.ds_of_single])  # (phi, roll, pitch) per q_k
+        gimbal = _gimbal(roll, pitch)
+        resolution = np.linalg.solve(gimbal, turn.T @ -MIRROR)
+        cr, sr, cp, sp = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch)
+        by_roll = np.array([[0.0, 0.0, 0.0], [0.0, -sr, -cr * cp], [0.0, cr, -sr * cp]])
+        by_pitch = np.array([[0.0, 0.0, cp], [0.0, 0.0, sr * sp], [0.0, 0.0, -cr * sp]])
+        by_phi = np.array([[-np.sin(phi), -np.cos(phi), 0.0], [np.cos(phi), -np.sin(phi), 0.0], [0.0, 0.0, 0.0]])
+        d_gimbal = rates[1][:, None, None] * by_roll + rates[2][:, None, None] * by_pitch
+        d_resolution = np.linalg.solve(gimbal, -d_gimbal @ resolution
+                                       + rates[0][:, None, None] * (by_phi.T @ -MIRROR))
+        d_rows = d_resolution @ angular + resolution @ d_angular  # d (resolution @ angular) / dq_k
+        configuration = np.zeros((bm.nq, bm.nq))
+        velocity = np.zeros((bm.nq, bm.nq, model.nv))
+        for i, j, sign in self.joints:
+            configuration[i, j] = sign
+        configuration[self.roll], configuration[self.pitch] = rates[1], rates[2]
+        velocity[self.roll], velocity[self.pitch] = d_rows[:, 0], d_rows[:, 1]
+        return configuration, np.swapaxes(velocity, 0, 1), d_rows[:, 2]
 
     def next_velocity(self, q: np.ndarray, j2: np.ndarray, qd_next: np.ndarray) -> np.ndarray:
         """The next step's joint velocity ``qd_next`` (its own coordinates, rad/s; or its columns)
