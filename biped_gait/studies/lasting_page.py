@@ -70,7 +70,7 @@ class LastingStudy:
 
 
 @dataclass(frozen=True)
-class ArmOptimum:
+class LastingArmOptimum:
     """The least E of one swing at one d on the study's alpha grid: alpha* (deg), E there, E with
     the arms still (alpha = 0, the same gait in both swings; None if no solve of it finished) and
     whether both neighbours on the grid finished with a larger E (an interior minimum)."""
@@ -98,7 +98,7 @@ def arms_still(study: LastingStudy, duration: float) -> float | None:
     return sum(values) / len(values) if values else None
 
 
-def arm_optimum(study: LastingStudy, mode: str, duration: float) -> ArmOptimum | None:
+def arm_optimum(study: LastingStudy, mode: str, duration: float) -> LastingArmOptimum | None:
     """The least E of ``mode``'s sweep at ``duration``; E at alpha = 0 is the arms still's, from
     either swing (one gait)."""
     still = arms_still(study, duration)
@@ -110,7 +110,7 @@ def arm_optimum(study: LastingStudy, mode: str, duration: float) -> ArmOptimum |
     k = min(known, key=lambda j: efforts[j])
     neighbours = [efforts[j] for j in (k - 1, k + 1) if 0 <= j < len(efforts)]
     interior = len(neighbours) == 2 and all(e is not None and e > efforts[k] for e in neighbours)
-    return ArmOptimum(mode, duration, alphas[k], efforts[k], still, interior)
+    return LastingArmOptimum(mode, duration, alphas[k], efforts[k], still, interior)
 
 
 def _grid_minimum(rows: Sequence[dict], key: str) -> dict:

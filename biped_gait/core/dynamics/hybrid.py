@@ -198,7 +198,7 @@ class ImpactMap:
         xd, d_xd = bm.embed(qd_b), np.zeros((bm.double_support.nv, n))
         for contact, d_contact, impulse, at_rest in ((self.j1, d_j1, i_minus, False), (self.j2, d_j2, zero, True),
                                                      (self.j2, d_j2, i_plus, True)):
-            xd, d_xd = impact_sensitivity(self.mass_matrix, d_mass, contact, d_contact, xd, d_xd, impulse, rows,
+            xd, d_xd = impact_sensitivity((self.mass_matrix, d_mass), (contact, d_contact), (xd, d_xd), impulse, rows,
                                           at_rest)
         out = np.zeros((2 * n, 2 * n))
         out[:n, :n] = configuration
@@ -261,15 +261,16 @@ def _impact_system(mass_matrix: np.ndarray, contact: np.ndarray, xd: np.ndarray,
     return kkt, rhs
 
 
-def impact_sensitivity(mass_matrix: np.ndarray, d_mass: np.ndarray, contact: np.ndarray, d_contact: np.ndarray,
-                       xd: np.ndarray, d_xd: np.ndarray, joint_impulse: np.ndarray, rows: np.ndarray | slice,
+def impact_sensitivity(mass: tuple[np.ndarray, np.ndarray], contacts: tuple[np.ndarray, np.ndarray],
+                       velocity: tuple[np.ndarray, np.ndarray], joint_impulse: np.ndarray, rows: np.ndarray | slice,
                        at_rest: bool) -> tuple[np.ndarray, np.ndarray]:
-    """``impact_with`` for one double support (``xd`` nX,) and the derivative of its result along
-    k parameters: ``d_mass`` (k x nX x nX) and ``d_contact`` (k x c x nX) those of D_e and J, ``d_xd``
-    (nX x k) that of ``xd``, the joint impulse held. Differentiating the system
+    """``impact_with`` for one double support and the derivative of its result along k parameters,
+    each given as (value, derivative): ``mass`` D_e and its derivative (k x nX x nX), ``contacts`` J
+    and its (k x c x nX), ``velocity`` Xd (nX,) and its (nX x k); the joint impulse held. Differentiating the system
     [D_e, -J^T; J, 0] [Xd'; I_R] = [D_e Xd + B_e I; J Xd or 0] gives the same matrix on the right-hand
     side D_e' (Xd - Xd') + J'^T I_R + D_e dXd over J' (Xd - Xd') + J dXd (the contact keeping its
     velocity) or -J' Xd' (at rest). Returns Xd' (nX,) and its derivative (nX x k)."""
+    (mass_matrix, d_mass), (contact, d_contact), (xd, d_xd) = mass, contacts, velocity
     n = mass_matrix.shape[0]
     kkt, rhs = _impact_system(mass_matrix, contact, xd, joint_impulse, rows, at_rest)
     solved = np.linalg.solve(kkt, rhs)
