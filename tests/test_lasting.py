@@ -22,6 +22,7 @@ from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.model.biped import SWING_TIP, BipedModel
 from biped_gait.core.model.params import load_params
 from biped_gait.core.walking.balance import standing_pose
+from biped_gait.core.walking.held_support import held_support
 
 DEFAULT = GaitRequest(0.45, 0.45, math.radians(23.5))
 # IPOPT's tolerance is 1e-9 on the scaled equations; what the checks below allow is a thousand times
@@ -181,3 +182,7 @@ def test_a_stop_and_a_start_over_one_second(planner, gait, rest, kind):
         assert np.all(forces[:, 2] > -SOLVER * weight)
         assert np.all(np.abs(torque) <= limits + SOLVER * 100)
     assert support.friction_used <= bm.params.friction + 1e-6
+    # Not yet walkable (docs/model.md 14): 10 intervals of 0.1 s do not resolve the phase, its
+    # reactions between the collocation points pull by kilonewtons, and a walk refuses the plan.
+    with pytest.raises(ValueError, match="cannot be tracked: its reactions between its collocation points"):
+        held_support(ClosedChain(bm, planner.hybrid.exchange), support)

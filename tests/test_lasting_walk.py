@@ -43,6 +43,16 @@ def test_the_walked_plan_keeps_its_margins(walked):
     assert push[2] >= WALK_PUSH_OFF - 1e-6 * 50 and np.hypot(push[0], push[1]) <= 0.4 * push[2] + 1e-6 * 50
 
 
+def test_the_walked_plan_resolves_its_phase(walked):
+    """Between its collocation points the plan's reference is a motion of the closed chain with both
+    feet pressing (docs/model.md 14.1, held_support's resolution): the least vertical reaction along
+    it, every millisecond, 44.3 N where its points keep the 50 N margin; at least half the margin,
+    the rest being the mesh's error, which a plan on coarser intervals exceeds (the stop's and the
+    start's, -1.4 to -2.0 kN, tests/test_lasting.py)."""
+    _, orbit, _ = walked
+    assert orbit.double_support.least_normal_force() > WALK_LEAST_NORMAL_FORCE / 2
+
+
 def test_the_first_steps_walk_with_both_feet_down(walked):
     """Started on the plan, the first touchdown is the plan's (its own flow: to the re-aim's
     tolerance), the landing soft; twenty steps each last about T + d, their double supports have

@@ -541,7 +541,11 @@ class SimulatorNode(Node):
         orbit = tuple(replace(orbit_from_msg(plan), params=params) for plan in plans)
         support = lasting_support_from_msg(plans[0])
         if support is not None:  # the orbit walked with its double support that lasts, tracked
-            orbit = (lasting_orbit(orbit[0], support, HybridStep(BipedModel.from_params(load_params(params or None)))),)
+            try:
+                orbit = (lasting_orbit(orbit[0], support, HybridStep(BipedModel.from_params(load_params(params or None)))),)
+            except ValueError as exc:  # a plan its walk cannot track (held_support): said, not walked
+                self._not_started(str(exc))
+                return
         start_ns = self.get_clock().now().nanoseconds
         pacer = Pacer(self.rtf)
         plan = plans[0]
