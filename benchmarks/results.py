@@ -1,7 +1,8 @@
 """The benchmarks' results kept in the repository: each benchmark that the README quotes writes its
 figures to ``benchmarks/results/<benchmark>.json`` with when, where and on which code it ran (the
 date in UTC, the machine: CPU model, cores, Python, and the commit the benchmark started on,
-``+dirty`` when the code that runs had changes: ``CODE``). The figures the README and docs quote are the ``quoted`` texts of these files,
+``+dirty`` when the code that runs had changes: ``CODE``; the machine's load averages over 1, 5
+and 15 minutes when it started and when it wrote, for a shared machine's figures move with them). The figures the README and docs quote are the ``quoted`` texts of these files,
 as the benchmark formatted them (``tests/test_readme_figures.py`` checks each quoted figure is
 there); ``figures`` keeps the raw medians (s, or ratios) beside them."""
 
@@ -44,6 +45,7 @@ def _commit() -> str:
 
 
 COMMIT = _commit()  # the code that runs: taken when the benchmark starts
+LOAD = os.getloadavg()  # the load when the benchmark starts
 
 
 def write(name: str, quoted: dict[str, str], figures: dict[str, float], conditions: dict[str, object]) -> Path:
@@ -56,6 +58,8 @@ def write(name: str, quoted: dict[str, str], figures: dict[str, float], conditio
         "machine": {"cpu": _cpu(), "cores": os.cpu_count(), "python": platform.python_version(),
                     "system": f"{platform.system()} {platform.release()}"},
         "commit": COMMIT,
+        "load average (1, 5, 15 min)": {"at start": [round(x, 2) for x in LOAD],
+                                         "at end": [round(x, 2) for x in os.getloadavg()]},
         "conditions": conditions,
         "quoted": quoted,
         "figures": figures,
