@@ -33,6 +33,7 @@ HUMAN_LIKE = 0.1  # s: the human-like double support (at L = T = 0.45 s)
 AT_LIMIT = 0.1  # N m: a peak torque this close to its effort limit is at it (IPOPT's bounds hold to ~1e-6)
 AT_FRICTION = 1e-3  # the friction used this close to mu is at the floor's limit
 MODES = ("normal", "anti-normal")
+HEADING = "## A double support that lasts: its effort and the arms' optimum (beyond the paper)"
 STUDY_COMMAND = "python -m biped_gait.studies.lasting_study --out docs/lasting-study.json"
 
 
@@ -53,11 +54,8 @@ class LastingStudy:
     @classmethod
     def load(cls, path: Path, params_name: str = DEFAULT_PARAMS) -> "LastingStudy":
         raw = json.loads(Path(path).read_text())
-        params = load_params(params_name)
-        model = BipedModel.from_params(params)
-        limits = tuple(float(model.coordinates[k].spec.limits.effort) for k in model.actuated)
         return cls(str(raw["date"]), str(raw["commit"]), tuple(raw["durations"]), tuple(raw["alphas"]),
-                   model.actuated_names, limits, params.friction)
+                   *default_joints(params_name))
 
     def sweep(self, mode: str, duration: float) -> list[dict]:
         """The alpha sweep's rows of one swing at one d, by alpha."""
@@ -85,6 +83,14 @@ class LastingArmOptimum:
     @property
     def saving(self) -> float | None:
         return None if self.still is None else self.still - self.E
+
+
+def default_joints(params_name: str = DEFAULT_PARAMS) -> tuple[tuple[str, ...], tuple[float, ...], float]:
+    """The actuated joints' names and effort limits (N m) of a parameter set, and its floor's mu."""
+    params = load_params(params_name)
+    model = BipedModel.from_params(params)
+    limits = tuple(float(model.coordinates[k].spec.limits.effort) for k in model.actuated)
+    return model.actuated_names, limits, params.friction
 
 
 def solved(rows: Sequence[dict]) -> list[dict]:

@@ -3,7 +3,8 @@ the default parameter set and the paper's table verbatim, with its figures, the 
 claims checked on the computed numbers, and where the project and the paper differ,
 written from the computed evidence; then the maps of where walking is possible and the walk
 beyond the paper (stability, pushes, commanded speed: ``walking_page``), and the double support
-that lasts, read from its stored study beside the page (``lasting_page``).
+that lasts and the actuated swing, read from their stored studies beside the page (``lasting_page``,
+``actuated_page``).
 
 Everything on the page is computed when it is generated (``biped-gait results-page``); only
 the paper's own numbers are constants here. W in N m s, angular momentum in kg m^2/s,
@@ -33,7 +34,9 @@ from .push_study import STUDY_DIRECTIONS
 from .reviewer import ReviewerChecks, reviewer_lines
 from .stability_study import PointStability, point_stability, stability_lines
 from .hips_page import HIPS_PARAMS, hips_lines, hips_study
-from .lasting_page import LASTING_STUDY, LastingStudy, lasting_figures, lasting_lines
+from .actuated_page import (ACTUATED_FIGURE, ACTUATED_STUDY, HEADING as ACTUATED_HEADING, ActuatedStudy,
+                            actuated_figure, actuated_lines)
+from .lasting_page import HEADING as LASTING_HEADING, LASTING_STUDY, LastingStudy, lasting_figures, lasting_lines
 from .mujoco_pulses import DURATIONS as PULSE_DURATIONS, PulseRow, pulse_lines, pulse_rows
 from .turning_page import FIGURE as TURNING_FIGURE, Turning, turning_figure, turning_lines, turning_study
 from .study import FIG4_CASES, FIG5_CASE, PAPER_PERIOD, TABLE_CASES, Study, run_study
@@ -376,6 +379,8 @@ class Extensions:
     pulses: Sequence[PulseRow] = ()
     lasting: LastingStudy | None = None
     lasting_path: Path | None = None  # where the lasting study was looked for (None: no such section)
+    actuated: ActuatedStudy | None = None
+    actuated_path: Path | None = None  # where the actuated swing's study was looked for (None: no such section)
 
 
 STABILITY_FIGURE = "stability.png"
@@ -410,7 +415,7 @@ def render(
         "",
     ]
     lines += [f"![{caption}]({path})\n\n*{caption}*\n" for caption, path in figures.items()
-              if not path.startswith(("map-", "walk-", "lasting-", f"fig4-{HIPS_PARAMS}"))
+              if not path.startswith(("map-", "walk-", "lasting-", "actuated-", f"fig4-{HIPS_PARAMS}"))
               and path not in (STABILITY_FIGURE, RATE_FIGURE, TURNING_FIGURE)]
     for study in studies:
         label = " (default)" if study is default else ""
@@ -445,8 +450,11 @@ def render(
                   "by the simulator (`-p turn_radius:=R`, or `/cmd_vel` angular.z).", ""]
         lines += turning_lines(extensions.turning)
     if extensions.lasting_path is not None:
-        lines += ["", "## A double support that lasts: its effort and the arms' optimum (beyond the paper)", ""]
+        lines += ["", LASTING_HEADING, ""]
         lines += lasting_lines(extensions.lasting, extensions.lasting_path)
+    if extensions.actuated_path is not None:
+        lines += ["", ACTUATED_HEADING, ""]
+        lines += actuated_lines(extensions.actuated, extensions.actuated_path)
     if extensions.pulses:
         lines += ["", "## A double support that lasts, walked in MuJoCo (beyond the paper)", "",
                   "The paper's caveat: impulsive torques cannot be realized. In MuJoCo (`engine:=mujoco`, docs/model.md "
@@ -514,8 +522,13 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     figures["Effort per metre against the turn radius"] = (turning_figure(extensions.turning), TURNING_FIGURE)
     lasting_path = out.parent / LASTING_STUDY
     lasting = LastingStudy.load(lasting_path) if lasting_path.is_file() else None
-    extensions = replace(extensions, lasting=lasting, lasting_path=lasting_path)
+    actuated_path = out.parent / ACTUATED_STUDY
+    actuated = ActuatedStudy.load(actuated_path) if actuated_path.is_file() else None
+    extensions = replace(extensions, lasting=lasting, lasting_path=lasting_path, actuated=actuated,
+                         actuated_path=actuated_path)
     figures.update(lasting_figures(lasting))
+    if actuated is not None:
+        figures["The actuated swing: E against tau and against alpha"] = (actuated_figure(actuated), ACTUATED_FIGURE)
     paths = [save(fig, out.parent / name) for fig, name in figures.values()]
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(render(studies, references, {c: name for c, (_, name) in figures.items()}, coarse_step, extensions))
