@@ -42,6 +42,16 @@ def _number(cell: str) -> float:
     return float(cell.strip("*").split()[0])
 
 
+def check_grid_row(section: str, alphas: list[dict], mode: str, key: str, value: float) -> list[dict]:
+    """The E(alpha) row "``mode``, ``value`` s" of ``section`` says the stored sweep's rows of ``mode``
+    at ``key`` = ``value`` (a dash where the solve did not finish); returns those rows by alpha."""
+    sweep = sorted((r for r in alphas if r["mode"] == mode and r[key] == value), key=lambda r: r["alpha_deg"])
+    (cells,) = _rows(section, re.escape(f"{mode}, {value:g} s"))
+    for cell, r in zip(cells[1:], sweep, strict=True):
+        assert cell == "-" if not r["success"] else _number(cell) == pytest.approx(r["E"], abs=TWO_DECIMALS)
+    return sweep
+
+
 def check_lasting_section(text: str, stored: dict) -> None:
     """The section of ``text`` says the stored study ``stored`` (its JSON): its date and commit, E,
     E / W, the friction used and the iterations against d, the peak torques at d = 0.1 s against
@@ -71,11 +81,7 @@ def check_lasting_section(text: str, stored: dict) -> None:
     assert params.friction == 0.5 and "friction used (mu = 0.5)" in section
     for mode in ("normal", "anti-normal"):
         for d in sorted({r["d"] for r in stored["alphas"]}):
-            sweep = sorted((r for r in stored["alphas"] if r["mode"] == mode and r["d"] == d),
-                           key=lambda r: r["alpha_deg"])
-            (cells,) = _rows(section, re.escape(f"{mode}, {d:g} s"))
-            for cell, r in zip(cells[1:], sweep, strict=True):
-                assert cell == "-" if not r["success"] else _number(cell) == pytest.approx(r["E"], abs=TWO_DECIMALS)
+            sweep = check_grid_row(section, stored["alphas"], mode, "d", d)
             best = min((r for r in sweep if r["success"]), key=lambda r: r["E"])
             (optimum,) = [c for c in _rows(section, re.escape(f"{d:g}")) if c[1] == mode]
             assert _number(optimum[2]) == pytest.approx(best["alpha_deg"], abs=1e-9)

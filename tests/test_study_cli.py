@@ -15,6 +15,7 @@ import time
 import pytest
 
 from .test_cli import ENTRY, run
+from .test_actuated_page import STORED as ACTUATED_STUDY, check_actuated_section
 from .test_lasting_page import STORED as LASTING_STUDY, check_lasting_section
 
 pytestmark = pytest.mark.studies
@@ -146,10 +147,12 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     """Every section and figure of the page, on coarse spacings (the arm amplitudes; the walk's
     closed loops and pushes at alpha 0 only, and alpha*; the maps' optima on one atlas node in 4
     along L and T) and a part of the pulses and push directions (docs/results.md is made with the
-    finer defaults); the lasting double support's section from the stored study, copied beside the page."""
+    finer defaults); the lasting double support's and the actuated swing's sections from their stored studies,
+    copied beside the page."""
     page = tmp_path / "docs" / "results.md"
     page.parent.mkdir()
     shutil.copy(LASTING_STUDY, page.parent)
+    shutil.copy(ACTUATED_STUDY, page.parent)
     proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "90", "--workers", "2",
                "--pulse-durations", "5", "--push-directions", "left", "right", "--map-stride", "4", timeout=280)
     assert proc.returncode == 0, proc.stderr
@@ -164,10 +167,11 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
                     "## A double support that lasts: its effort and the arms' optimum (beyond the paper)"):
         assert heading in text
     check_lasting_section(text, json.loads(LASTING_STUDY.read_text()))
+    check_actuated_section(text, json.loads(ACTUATED_STUDY.read_text()))
     links = re.findall(r"!\[[^]]*\]\(([^)]+)\)", text)
     assert links[:3] == ["fig4.png", "fig5.png", "fig4-aoustin2013-table.png"]
     assert {"map-region-aoustin2013.png", "map-optimum-aoustin2013-table.png", "stability.png",
-            "rate-bound.png", "lasting-effort.png", "lasting-arms.png"} <= set(links)
+            "rate-bound.png", "lasting-effort.png", "lasting-arms.png", "actuated-effort.png"} <= set(links)
     assert all((page.parent / link).read_bytes()[:8] == PNG_SIGNATURE for link in links)
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 
 from .figures import save
 from .lasting_page import AT_LIMIT, HEADING as LASTING_HEADING, MODES, default_joints, solved
-from .markdown import markdown_table
+from .markdown import markdown_table, missing_study, stored_study
 
 ACTUATED_STUDY = "actuated-swing-study.json"  # beside the page
 ACTUATED_FIGURE = "actuated-effort.png"
@@ -194,8 +194,9 @@ def _arms_lines(study: ActuatedStudy) -> list[str]:
     lines += ["", "*Reading.* Does the arms' optimum survive when no torque exceeds a motor's limit? The normal swing's "
               + "; ".join(parts) + f" (each within {step / 2:g} deg on this grid); where alpha = 0 was solved the saving "
               f"is at most {max(percents):.1f} % of E, where the default gait swings its arms by "
-              f"{study.taus[0]['alpha_deg']:g} deg (the paper's optimum of the impulsive gait). " + ("So a small arm swing still pays, by little. " if all(p > 0 for p in percents)
-                                    else "So the arms' optimum does not survive: the arms still cost least. ")
+              f"{study.taus[0]['alpha_deg']:g} deg (the paper's optimum of the impulsive gait). "
+              + ("So a small arm swing still pays, by little. " if all(p > 0 for p in percents)
+                 else "So the arms' optimum does not survive: the arms still cost least. ")
               + "The anti-normal "
               "swing's least E is at " + ", ".join(f"{o['alpha_deg']:g} deg" for o in anti)
               + " (tau = " + ", ".join(f"{o['tau']:g}" for o in anti) + f" s). Where both finished at an alpha above 0 the "
@@ -208,15 +209,15 @@ def _arms_lines(study: ActuatedStudy) -> list[str]:
 def actuated_lines(study: ActuatedStudy | None, path: Path) -> list[str]:
     """The section's text, below its heading; ``study`` None: none was found at ``path``."""
     if study is None:
-        return [f"No stored study at `{path}`: run `{STUDY_COMMAND}` (about an hour of IPOPT solves) and the page "
-                "again."]
+        return missing_study(path, STUDY_COMMAND, "about an hour of IPOPT solves")
     lines = ["The cycle of docs/model.md section 15: the swing leg is actuated for tau seconds after the double "
              "support and tau seconds before the next one, every torque within the joint table's effort limit, the "
-             "rest of the single support ballistic. From the stored study "
-             f"`{ACTUATED_STUDY}` (`{STUDY_COMMAND}`), computed on {study.date} at commit {study.commit}; the page "
-             "reads it and solves nothing.", "", "### Effort and peak torques against tau and d", ""]
+             "rest of the single support ballistic. "
+             + stored_study(ACTUATED_STUDY, STUDY_COMMAND, study.date, study.commit),
+             "", "### Effort and peak torques against tau and d", ""]
     lines += _taus_lines(study)
-    lines += ["", f"![E against tau at each d (dotted: the impulsive E); E against alpha at each tau, normal solid, anti-normal dashed]({ACTUATED_FIGURE})", "", "### The limits lifted", ""]
+    lines += ["", "![E against tau at each d (dotted: the impulsive E); E against alpha at each tau, normal solid, "
+              f"anti-normal dashed]({ACTUATED_FIGURE})", "", "### The limits lifted", ""]
     lines += _free_lines(study)
     lines += ["", "### The optimal arm swing with the swing actuated", ""]
     lines += _arms_lines(study)

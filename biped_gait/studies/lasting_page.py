@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 
 from ..core.model.biped import BipedModel
 from ..core.model.params import DEFAULT_PARAMS, load_params
-from .markdown import markdown_table
+from .markdown import markdown_table, missing_study, stored_study
 from .figures import LINE_STYLES
 
 LASTING_STUDY = "lasting-study.json"  # beside the page
@@ -272,14 +272,12 @@ def _arms_lines(study: LastingStudy) -> list[str]:
 def lasting_lines(study: LastingStudy | None, path: Path) -> list[str]:
     """The section's text, below its heading; ``study`` None: none was found at ``path``."""
     if study is None:
-        return [f"No stored study at `{path}`: run `{STUDY_COMMAND}` (many minutes of IPOPT solves) and the page "
-                "again."]
+        return missing_study(path, STUDY_COMMAND, "many minutes of IPOPT solves")
     lines = [f"The cycle of docs/model.md section 14: the ballistic single support, the paper's I^-, a held "
              "touchdown, d seconds of double support with finite torques (the closed chain, both reactions in "
              "their friction pyramids, each torque within the joint table's effort), the paper's I^+. "
-             "E = Sum |I^-| + integral of Sum |Gamma_j| dt + Sum |I^+|. From the stored study "
-             f"`{LASTING_STUDY}` (`{STUDY_COMMAND}`, every solve cold), computed on {study.date} at commit "
-             f"{study.commit}; the page reads it and solves nothing.", "", "### Effort, torques and friction against d", ""]
+             "E = Sum |I^-| + integral of Sum |Gamma_j| dt + Sum |I^+|. "
+             + stored_study(LASTING_STUDY, STUDY_COMMAND, study.date, study.commit, ", every solve cold"), "", "### Effort, torques and friction against d", ""]
     lines += _durations_lines(study)
     lines += ["", f"![E against d, with E(0+) and W]({EFFORT_FIGURE})", "", "### The human-like point", ""]
     lines += _human_like_lines(study)

@@ -9,3 +9,15 @@ def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list
     """A Markdown table's lines: ``header``, its rule, one line per row of cells."""
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     return lines + ["| " + " | ".join(row) + " |" for row in rows]
+
+
+def stored_study(name: str, command: str, date: str, commit: str, note: str = "") -> str:
+    """The sentence naming a section's stored study ``name``, the ``command`` that makes it (with
+    ``note``), its date and commit."""
+    return (f"From the stored study `{name}` (`{command}`{note}), computed on {date} at commit {commit}; the page "
+            "reads it and solves nothing.")
+
+
+def missing_study(path, command: str, cost: str) -> list[str]:
+    """A section's text when no stored study was found at ``path``: how to make it (``cost``: how long)."""
+    return [f"No stored study at `{path}`: run `{command}` ({cost}) and the page again."]
