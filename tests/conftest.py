@@ -13,8 +13,11 @@ from contextlib import contextmanager
 from pathlib import Path
 
 # Every ROS process of the test session (this one and the nodes it starts) keeps DDS discovery
-# on this machine and uses a domain of its own, so parallel sessions do not see each other.
+# on this machine and uses a domain of its own, so parallel sessions do not see each other. They
+# talk over UDP on loopback alone: Fast DDS's shared-memory transport can leave a node restarted
+# beside one that stays up unheard (biped_gait/ros/environment.py).
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+os.environ["FASTDDS_BUILTIN_TRANSPORTS"] = "UDPv4"
 os.environ.setdefault("ROS_DOMAIN_ID", str(random.SystemRandom().randint(1, 100)))
 # pytest-xdist's workers (gw0, gw1, ...) inherit the session's domain: worker k takes the k-th of
 # distinct domains in 1..232 (Fast DDS's range; 101 and 232 are coprime), so that the nodes of

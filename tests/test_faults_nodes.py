@@ -43,6 +43,7 @@ pytestmark = [pytest.mark.faults, pytest.mark.ros]
 STOP_WITHIN = 2.0  # s from the signal to the process's end
 ROUNDS = 10  # per signal and per situation: 2 signals x 2 situations x 10 = 40 stops
 BATCH = 4  # nodes started at once
+PLANNER_LOGS: dict[str, Path] = {}  # the module's planner's log, by node name (for a failure's message)
 WALKERS = 2  # simulators walking in real time at once: one a core (more, and a stop times the scheduler)
 
 
@@ -87,11 +88,15 @@ def batches(tmp_path: Path, start, size: int = BATCH) -> Iterator[list[tuple[Pat
                     proc.wait(timeout=30)
 
 
-def wait_for(condition, timeout: float, what: str) -> None:
+def wait_for(condition, timeout: float, what: str, logs: tuple[Path, ...] = ()) -> None:
+    """Wait until ``condition()``; after ``timeout`` s a TimeoutError saying ``what``, with the
+    last lines of each log in ``logs`` (what the nodes were doing: discovery, retries)."""
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            raise TimeoutError(what)
+            tails = "".join(f"\n--- {log}:\n" + "\n".join(log.read_text(errors="replace").splitlines()[-40:])
+                            for log in logs if log.exists())
+            raise TimeoutError(what + tails)
         time.sleep(0.05)
 
 
@@ -108,6 +113,7 @@ def planner(tmp_path_factory):
     where = tmp_path_factory.mktemp("faults_planner")
     name = f"faults_planner_{uuid.uuid4().hex[:6]}"
     proc = start_node("biped-gait-planner", "-r", f"__node:={name}", "-p", "record:=false", cwd=where)
+    PLANNER_LOGS[name] = where / "biped-gait-planner.log"
     yield name
     assert stop_node(proc) == 0, log_of(where, "biped-gait-planner")
 
@@ -162,7 +168,7 @@ def test_the_simulator_stops_cleanly_during_walks(planner, side, tmp_path, sig):
     for rounds in batches(tmp_path, start, WALKERS):
         for where, proc in rounds:
             wait_for(lambda: "walking L =" in log_of(where, "biped-gait-simulator") or proc.poll() is not None, 90.0,
-                     "the walk did not start")
+                     "the walk did not start", (where / "biped-gait-simulator.log", PLANNER_LOGS[planner]))
         settle = time.monotonic() + 0.3
         side.wait(lambda: time.monotonic() > settle)
         for where, proc in rounds:

@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 export VENV=${VENV:-.venv}  # the venv, and PYTHON the interpreter that makes it (tools/setup.sh)
 bash tools/setup.sh
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+export FASTDDS_BUILTIN_TRANSPORTS=UDPv4  # UDP on loopback alone (biped_gait/ros/environment.py)
 export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-42}
 "$VENV"/bin/biped-gait plan --json bags/default_gait.json
 "$VENV"/bin/biped-gait-launch --config config/demo.yaml --analyze

@@ -10,6 +10,7 @@ cd "$(dirname "$0")/.."
 export VENV=${VENV:-.venv}  # the venv, and PYTHON the interpreter that makes it (tools/setup.sh)
 bash tools/setup.sh
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+export FASTDDS_BUILTIN_TRANSPORTS=UDPv4  # UDP on loopback alone (biped_gait/ros/environment.py)
 # Fast DDS's shared-memory ports and segments of nodes that were killed (the fault tests kill
 # some) stay in /dev/shm; after many runs on one machine, a new node could be left unmatched by
 # an old client. Fast DDS's own tool removes only those whose owner is gone (their lock is free),
