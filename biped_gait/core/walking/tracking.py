@@ -3,7 +3,9 @@ samples as a reference, and the LQR about it.
 
 **The reference.** The plan's collocation points (nodes and midpoints of its Hermite-Simpson
 intervals) carry q, qd, qdd and the torques Gamma; between them q and qd are the cubic Hermite
-interpolants of (q, qd) and (qd, qdd), Gamma the linear one.
+interpolants of (q, qd) and (qd, qdd), Gamma the linear one (``HeldSupport``'s, with which the
+lasting walk was measured) or the quadratic through each interval's node, midpoint and node, the
+rule's own (``swing_ends.SwingReference``: docs/model.md 15.1 says why).
 
 **The feedback** is the standing balance's LQR machinery (``balance``) about the reference: at
 each sample the dynamics linearized there (its state and torques), in the minimal coordinates
@@ -49,8 +51,9 @@ RATE_SCALE = 1e-1  # rad/s
 class Tracking:
     """A planned phase of ``duration`` s to track (module docstring): what holds the tips
     (``chain``), the samples ``t`` (s in the phase), ``q``, ``qd``, ``qdd`` (rows, the step's
-    coordinates) and ``torques`` (N m, actuated joints), and the feedback (at each sample the
-    minimal coordinates' ``basis`` and the ``gain``; the joints' effort ``limits``)."""
+    coordinates) and ``torques`` (N m, actuated joints), and the feedback (at the instants
+    ``gain_t``, s in the phase, the minimal coordinates' ``basis`` and the ``gain``; the joints'
+    effort ``limits``)."""
 
     chain: object
     duration: float
@@ -59,6 +62,7 @@ class Tracking:
     qd: np.ndarray
     qdd: np.ndarray
     torques: np.ndarray
+    gain_t: np.ndarray
     basis: np.ndarray
     gain: np.ndarray
     limits: np.ndarray
@@ -71,8 +75,11 @@ class Tracking:
         """q*, qd* and Gamma* at ``t`` (s in the phase, clamped to it)."""
         t = min(max(t, 0.0), self.duration)
         q, qd = (spline(t) for spline in self._splines)
-        torque = np.array([np.interp(t, self.t, column) for column in self.torques.T])
-        return q, qd, torque
+        return q, qd, self.torque(t)
+
+    def torque(self, t: float) -> np.ndarray:
+        """Gamma*(t) (N m; ``t`` s in the phase, within it): linear between the samples."""
+        return np.array([np.interp(t, self.t, column) for column in self.torques.T])
 
     def along(self) -> Iterator[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
         """The reference every ``RESOLUTION_STEP`` or less over the phase, both ends included: t, q*,
@@ -86,9 +93,9 @@ class Tracking:
 
     def law(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The actuated joints' torques (N m) at ``t`` (s in the phase) in (``q``, ``qd``): the
-        gain and basis of the sample nearest ``t``."""
+        gain and basis of the instant nearest ``t``."""
         q_ref, qd_ref, torque = self.reference(t)
-        k = int(np.argmin(np.abs(self.t - t)))
+        k = int(np.argmin(np.abs(self.gain_t - t)))
         basis = self.basis[k]
         error = np.concatenate([basis.T @ (q - q_ref), basis.T @ (qd - qd_ref)])
         return np.clip(torque - self.gain[k] @ error, -self.limits, self.limits)
@@ -98,7 +105,7 @@ def tracking(chain, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarra
              cls: type = Tracking, **extra) -> Tracking:
     """The ``Tracking`` (or its subclass ``cls``, its further fields ``extra``) of the samples ``t``
     (s, from 0), ``q``, ``qd``, ``qdd`` and ``torques`` of a phase held by ``chain``: at each sample
-    the minimal basis and the LQR gain (module docstring)."""
+    the minimal basis and the LQR gain of the dynamics frozen there (module docstring)."""
     limits = effort_limits(chain)
     bases, gains = [], []
     for k in range(len(t)):
@@ -106,5 +113,5 @@ def tracking(chain, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarra
         a, b = linearization(chain, q[k], qd[k], torques[k], basis)
         bases.append(basis)
         gains.append(lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE))
-    return cls(chain, float(t[-1]), np.asarray(t), q, qd, qdd, torques, np.array(bases), np.array(gains), limits,
-               **extra)
+    t = np.asarray(t)
+    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), np.array(gains), limits, **extra)
