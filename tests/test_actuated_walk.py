@@ -2,8 +2,8 @@
 core/walking/swing_ends.py, docs/model.md section 15.1): the reference of each actuated end resolved
 between its collocation points, the actuated start tracked from the plan's lift-off, the first step
 landed, held and lifted off with the state continuous; and where the walk does not hold yet (the
-second step's flight, open loop, amplifies the tracked start's error beyond what the actuated end's
-torques and the floor's friction can take).
+actuated end, its torques clipped at the limit where Hermite-Simpson's exceed it between the
+points, lands off the plan, and the third touchdown misses the ground).
 
 The plan is solved once (tau, d) = (0.1, 0.1) s at the default gait with the walk's margins on the
 reactions (50 N, friction within mu - 0.1): about 40 s on the project's 2-core machine."""
@@ -48,29 +48,34 @@ def walker(planned) -> Walker:
 
 def test_the_reference_resolves_the_swing_ends(planned):
     """Along each actuated end's reference, every millisecond, the single support's forward dynamics
-    under the plan's torques (``PinnedTip``) give the plan's own reactions at its collocation points
-    (within 1e-6 m g: the program's tolerance) and between them press within the floor's pyramid:
-    measured 175.6 N (start) and 128.5 N (end) at the least, friction ratios 0.385 and 0.4025 against
-    the plan's 0.4 at its points (Hermite-Simpson's ringing between them: 0.6 %). The double
-    support's reference keeps 48.0 N (its points 50 N)."""
+    under the plan's torques (``PinnedTip``; Hermite-Simpson's quadratic torques between the points)
+    give the plan's own reactions at its collocation points (within 1e-6 m g: the program's
+    tolerance) and between them press within the floor's pyramid: measured 175.6 N (start) and
+    124.8 N (end) at the least, friction ratios 0.385 and 0.409 against the plan's 0.4 at its points
+    (the ringing between them). The double support's reference keeps 48.0 N (its points 50 N). The
+    rule's torques, though, leave the limit between the points: 225 N m at the start, 250 N m at the
+    end's last half-interval (the swing hip), where the plan's points are at 200 (docs/model.md 15.1)."""
     planner, cycle, orbit = planned
     bm = planner.model
     weight = bm.total_mass * bm.params.gravity
-    for which, least in (("start", 170.0), ("end", 120.0)):
+    for which, least, most in (("start", 170.0, 220.0), ("end", 120.0, 240.0)):
         t, forces = orbit.swing_ends.reactions(which)
         planned_end = getattr(cycle, which)
         points = np.searchsorted(t, planned_end.t - planned_end.t[0] - 1e-9)
         assert np.max(np.abs(forces[points] - planned_end.contact_forces)) < 1e-6 * weight
         assert forces[:, 2].min() > least
-        assert friction_ratio(forces) < 0.41 and np.max(cone_rows(forces, bm.params.friction)) < 0.0
+        assert friction_ratio(forces) < 0.42 and np.max(cone_rows(forces, bm.params.friction)) < 0.0
+        reference = getattr(orbit.swing_ends, which)
+        assert np.max(np.abs(reference.torques)) <= LIMIT + 1e-6 * 100
+        assert max(np.abs(reference.torque(t)).max() for t in np.linspace(0.0, TAU, 1001)) > most
     assert orbit.double_support.least_normal_force() > 0.9 * WALK_LEAST_NORMAL_FORCE
 
 
 def test_the_actuated_start_tracks_the_plan(planned):
-    """From the plan's lift-off the actuated start, the plan's torques and the LQR, stays within
-    3 mrad and 0.2 rad/s of the plan (measured 2.4 mrad and 0.16 rad/s, where the bang-bang torques
-    switch; 0.68 mrad and 0.010 rad/s at its end), every torque within 200 N m (the plan's at the
-    limit: the feedback clipped there), the stance tip's reaction within the pyramid at every sample."""
+    """From the plan's lift-off the actuated start, the plan's torques and the swing's LQR, stays
+    within 3 mrad and 0.2 rad/s of the plan (measured 1.8 mrad and 0.14 rad/s, where the bang-bang
+    torques switch and the limit clips the rule's; 0.43 mrad and 0.0023 rad/s at its end), every
+    torque within 200 N m, the stance tip's reaction within the pyramid at every sample."""
     _, _, orbit = planned
     start = orbit.swing_ends.start
     run = walker(planned).run_phase()
@@ -80,14 +85,16 @@ def test_the_actuated_start_tracks_the_plan(planned):
         assert np.max(np.abs(sample.q - q_ref)) < 3e-3 and np.max(np.abs(sample.qd - qd_ref)) < 0.2
         assert np.max(np.abs(sample.torque)) <= LIMIT + 1e-9
         assert np.max(cone_rows(sample.forces[0, :3], 0.5)) < 0.0
+    q_ref, qd_ref, _ = start.reference(TAU)
+    assert np.max(np.abs(run.samples[-1].q - q_ref)) < 1e-3 and np.max(np.abs(run.samples[-1].qd - qd_ref)) < 1e-2
 
 
 def test_the_first_step_lands_and_lifts_off(planned):
     """The first step, from the plan's lift-off: the flight, the actuated end to the planned
     touchdown at T, the held landing (both tips pressing; the passive impact alone would leave the
-    old tip pulling: the walk's I^- corrects it, 0.52 N m s in all measured, what 200 N m gives in
-    2.6 ms), d seconds with both feet pressing (33 N at the least against the plan's 50), every
-    torque within 200 N m; the touchdown 0.137 rad/s from the plan's state. The lift-off keeps the
+    old tip pulling: the walk's I^- corrects it, 0.25 N m s in all measured, what 200 N m gives in
+    1.3 ms), d seconds with both feet pressing (33 N at the least against the plan's 50), every
+    torque within 200 N m; the touchdown 0.090 rad/s from the plan's state. The lift-off keeps the
     state: the next step starts in the phase's end state, legs exchanged."""
     planner, _, orbit = planned
     w = walker(planned)
@@ -96,10 +103,10 @@ def test_the_first_step_lands_and_lifts_off(planned):
     touchdown = outcome.touchdown
     assert touchdown.t_step == pytest.approx(orbit.period + DURATION, abs=1e-9)
     report = touchdown.double_support
-    assert 0.0 < np.abs(report.i_minus).sum() < 1.0 and touchdown.W == pytest.approx(np.abs(report.i_minus).sum())
+    assert 0.0 < np.abs(report.i_minus).sum() < 0.5 and touchdown.W == pytest.approx(np.abs(report.i_minus).sum())
     assert not np.any(touchdown.i_plus)
     assert report.held_old[2] >= -1e-6 and report.held_new[2] >= -1e-6
-    assert 0.05 < touchdown.state_error < 0.3
+    assert 0.05 < touchdown.state_error < 0.15
     double = [s for s in outcome.samples if s.phase == DOUBLE_SUPPORT]
     assert len(double) >= round(DURATION * RATE) - 1
     for sample in outcome.samples:
@@ -117,23 +124,21 @@ def test_the_first_step_lands_and_lifts_off(planned):
     assert isinstance(lifted.phase, ActuatedStart) and lifted.state.t_step == 0.0
 
 
-def test_the_second_step_falls_where_its_flight_amplifies_the_error(planned):
-    """Why the walk does not hold yet (docs/model.md 15.1): the second step's actuated start leaves
-    the flight 0.68 mrad and 0.010 rad/s off the plan; the flight, open loop, amplifies that about
-    30-fold (20 mrad, 0.31 rad/s at T - tau), and at the actuated end's first instant the feedback's
-    torques push the stance tip's reaction out of the friction cone (|F_xy| / F_z = 1.75). A walk
-    that holds would change this test with docs/model.md 15.1."""
+def test_the_third_touchdown_misses_the_ground(planned):
+    """Where the walk stands (docs/model.md 15.1): the swing's LQR carries the flight (its end 3e-3
+    rad/s off the plan, where the start's frozen gains left 0.31), but the actuated end, its
+    torques clipped to 200 N m where the rule's reach 250, lands each step about 0.09 rad/s off
+    the plan's velocity; two steps walk, and at the third planned touchdown the swing tip is still
+    1.07 mm above the ground (the walk's 1 mm). A walk that holds changes this test with 15.1."""
     _, _, orbit = planned
     ends = orbit.swing_ends
     w = walker(planned)
-    assert not w.walk_step().fall
+    for _ in range(2):
+        outcome = w.walk_step()
+        assert not outcome.fall, outcome.fall
+        assert 0.05 < outcome.touchdown.state_error < 0.15
+        flight_end = [s for s in outcome.samples if s.t_step <= orbit.period - TAU + 1e-9][-1]
+        assert np.max(np.abs(flight_end.qd - ends.end.reference(0.0)[1])) < 1e-2
     outcome = w.walk_step()
-    assert "slips" in outcome.fall
-    end_time = orbit.period - ends.duration
-    assert outcome.samples[-1].t_step == pytest.approx(end_time, abs=1e-9)
-    start_end = [s for s in outcome.samples if s.t_step <= ends.duration + 1e-9][-1]
-    q_ref, qd_ref, _ = ends.start.reference(ends.duration)
-    before = np.max(np.abs(start_end.qd - qd_ref))
-    after = np.max(np.abs(outcome.samples[-1].qd - ends.end.reference(0.0)[1]))
-    assert np.max(np.abs(start_end.q - q_ref)) < 2e-3 and before < 0.03
-    assert after > 10 * before
+    assert "above the ground" in outcome.fall
+    assert outcome.samples[-1].t_step == pytest.approx(orbit.period - 1.0 / RATE, abs=1e-9)
