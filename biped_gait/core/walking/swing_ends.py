@@ -15,9 +15,13 @@ discretized to second order in h; the tracking's weights at every step (Bryson's
 ``TOUCHDOWN_POSITION`` and ``TOUCHDOWN_RATE``; the Riccati recursion run backwards from the
 touchdown, so the start's gains steer the flight towards the end's reference.
 
+**The reference** (``SwingReference``): the plan's samples as ``tracking`` interpolates them, the
+torques between them Hermite-Simpson's own quadratics (linear ones are no motion of the single
+support at this mesh).
+
 **Resolution.** The plan holds the single support's equations at its collocation points only
-(Hermite-Simpson, 10 intervals of tau / 10 at each end), and Hermite-Simpson can ring between
-them (docs/model.md 14: the stop and the start were refused for it). Along the reference the
+(Hermite-Simpson over each end: 10 intervals by default, 20 in ``SwingRequest.walkable``), and
+Hermite-Simpson can ring between them (docs/model.md 14: the stop and the start were refused for it). Along the reference the
 stance tip's reaction, from the single support's forward dynamics every millisecond, must press
 within the floor's friction (``SwingEnds.reactions``); ``actuated_orbit`` refuses a plan whose
 reference does not, with the figures.
@@ -41,9 +45,9 @@ from .orbit import PlannedOrbit
 from .phases.pulse_dynamics import PinnedTip, friction_ratio
 from .tracking import POSITION_SCALE, RATE_SCALE, RESOLUTION_STEP, Tracking
 
-# The touchdown's state in the swing's LQR (its terminal weight, Bryson's): measured at the default
-# gait, (0.01 rad, 0.1 rad/s) and (0.03, 0.3) land 0.19 and 0.15 rad/s off the plan's velocity where
-# these land 0.17 (every millisecond's weights the tracking's; docs/model.md 15.1).
+# The touchdown's state in the swing's LQR (its terminal weight, Bryson's). Measured on the walkable
+# plan at the default gait (docs/model.md 15.1): (0.001 rad, 0.01 rad/s) walks two steps, (0.01, 0.1)
+# and these three, the touchdowns 0.003 rad/s off the plan's state.
 TOUCHDOWN_POSITION = 0.1  # rad
 TOUCHDOWN_RATE = 1.0  # rad/s
 

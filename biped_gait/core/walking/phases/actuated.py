@@ -3,7 +3,8 @@
 
 1. **the actuated start** (``ActuatedStart``, tau s from the lift-off): the single support, the
    stance tip pinned (``PinnedTip``), driven by the plan's torques Gamma*(t) and the LQR that tracks
-   the plan's state (``tracking``, the same law as the double support's);
+   the plan's state (``tracking``'s law, as the double support's; its gains the swing's LQR through
+   the flight, ``swing_ends``);
 2. **the flight** (``Flight``, to T - tau): ballistic, the planner's own flow; the swing foot
    landing in it is a fall;
 3. **the actuated end** (``ActuatedEnd``, tau s, to the plan's touchdown at T): as the start;
