@@ -37,11 +37,12 @@ import numpy as np
 
 from ..dynamics.flow import hermite_samples
 from . import views
-from .lasting import (ACCELERATION, INTERVALS, TOLERANCE, TORQUE, LastingProgram, LastingRequest, _Program,
-                      hermite_simpson)
+from .lasting import (ACCELERATION, INTERVALS, TOLERANCE, TORQUE, WALK_FRICTION_MARGIN, WALK_LEAST_NORMAL_FORCE,
+                      LastingProgram, LastingRequest, _Program, hermite_simpson)
 from .lasting_support import LastingSupport
 
-SWING_INTERVALS = 10  # Hermite-Simpson intervals over each actuated end of the swing
+SWING_INTERVALS = 10  # Hermite-Simpson intervals over each actuated end of the swing (by default)
+BETWEEN_POINTS = "the swing's torque between the points within its limit"
 SWING_ENDS = ("start", "end")
 
 
@@ -50,15 +51,32 @@ class SwingRequest:
     """What the cycle is asked: ``actuated_swing`` tau (s, > 0), the duration of each actuated end
     of the swing, and the double support (``LastingRequest``: its duration d >= 0, the effort
     minimized and the margins); ``within_limits`` False lifts the joint table's effort limits over the
-    swing's two ends (not over the double support), to follow tau -> 0 onto the impulses."""
+    swing's two ends (not over the double support), to follow tau -> 0 onto the impulses.
+    ``swing_intervals``: Hermite-Simpson intervals over each end; ``bounded_between``: each end's
+    torques within their limits between the collocation points too, not at them only (the rule's
+    torque over an interval is the quadratic through its node, midpoint and node, which overshoots:
+    bounded by its Bernstein coefficients g0, 2 gm - (g0 + g1) / 2, g1; what a walk needs,
+    docs/model.md 15.1)."""
 
     actuated_swing: float
     support: LastingRequest
     within_limits: bool = True  # False: the swing's ends free of the effort limits (the limit tau -> 0)
+    swing_intervals: int = SWING_INTERVALS
+    bounded_between: bool = False
+
+    @classmethod
+    def walkable(cls, actuated_swing: float, duration: float) -> "SwingRequest":
+        """The cycle a walk can track (docs/model.md 15.1): the double support's margins
+        (``LastingRequest``'s least normal force and friction margin; no push-off, there is no I^+),
+        20 intervals over each end, its torques bounded between the points."""
+        support = LastingRequest(duration, least_normal_force=WALK_LEAST_NORMAL_FORCE, friction_margin=WALK_FRICTION_MARGIN)
+        return cls(actuated_swing, support, swing_intervals=2 * SWING_INTERVALS, bounded_between=True)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.actuated_swing) and self.actuated_swing > 0.0):
             raise ValueError(f"actuated_swing must be a duration > 0 s, got {self.actuated_swing!r}")
+        if self.swing_intervals < 1:
+            raise ValueError(f"swing_intervals must be >= 1, got {self.swing_intervals!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,7 +137,8 @@ class ActuatedSwingProgram(LastingProgram):
     """The nonlinear program of the cycle (module docstring) for the model ``bm``: the double
     support on ``intervals`` collocation intervals (1 for d = 0: a phase of no duration, whose
     forces the held velocity must still allow), each actuated end of the swing on
-    ``SWING_INTERVALS``. Built once, solved for any gait, tau and d (its parameters)."""
+    ``swing_intervals``, its torques bounded between the points if ``bounded_between``
+    (``SwingRequest``). Built once, solved for any gait, tau and d (its parameters)."""
 
     # IPOPT's limited-memory Hessian stalls near the optimum here. Measured at tau = 0.1 s, d = 0: the
     # scaled dual infeasibility stays at 1.7e-5 from iteration 300 to 1,000 while E creeps from
@@ -130,7 +149,8 @@ class ActuatedSwingProgram(LastingProgram):
                       "ipopt.acceptable_constr_viol_tol": TOLERANCE}
 
     def __init__(self, bm, intervals: int, effort: str = "l1", friction: float = 0.5, exchange=None,
-                 flow=None) -> None:
+                 flow=None, swing_intervals: int = SWING_INTERVALS, bounded_between: bool = False) -> None:
+        self.swing_intervals, self.bounded_between = swing_intervals, bounded_between
         if bm.params.joints.lateral_hips:
             raise ValueError(f"{bm.params.name}: an actuated swing is planned for legs of pitch joints only "
                              "(aoustin2013, aoustin2013-table): the kinematic leg exchange at its lift-off is not "
@@ -178,7 +198,7 @@ class ActuatedSwingProgram(LastingProgram):
         of the swing over ``p_tau`` s, nodes and midpoints in time order; its first state ``first``
         ((q, qd) expressions, None: unknowns), its last posture ``q_last`` (None: free). Also the
         offsets of its last node's q and qd among the unknowns."""
-        nq, na, n_int = self.nq, self.na, SWING_INTERVALS
+        nq, na, n_int = self.nq, self.na, self.swing_intervals
         b, press, cost, least = terms
         lower_q, upper_q = self._ranges()
         h = p_tau / n_int
@@ -214,6 +234,12 @@ class ActuatedSwingProgram(LastingProgram):
                 nlp.le(-self.f_tip(x)[0][2], "the swing tip above the ground")
             cost(tau, h / 6 * weight, TORQUE)
             out.append((q, v, a, tau, force))
+        if self.bounded_between:  # each interval's quadratic torque within the convex hull of its Bernstein coefficients
+            limits = ca.DM(self.effort_limits)
+            for k in range(0, len(out) - 1, 2):
+                middle = 2 * out[k + 1][3] - (out[k][3] + out[k + 2][3]) / 2
+                nlp.le(middle - limits, BETWEEN_POINTS)
+                nlp.le(-middle - limits, BETWEEN_POINTS)
         return out, last
 
     # Solving ----------------------------------------------------------------------------------------
@@ -266,13 +292,13 @@ class ActuatedSwingProgram(LastingProgram):
 
     def _cycle(self, request: SwingRequest, q_t, period, stats, out, elapsed, solution) -> ActuatedSwingCycle:
         tau, d = request.actuated_swing, request.support.duration
-        n_swing = 2 * SWING_INTERVALS + 1
+        n_swing = 2 * self.swing_intervals + 1
         ends = {}
         for name, t0 in (("start", 0.0), ("end", period - tau)):
             ends[name] = SwingEnd(t0 + np.linspace(0.0, tau, n_swing), self._embed_array(out[f"{name}_q"]),
                                   self._embed_array(out[f"{name}_v"]), self._embed_array(out[f"{name}_a"]),
                                   out[f"{name}_tau"], out[f"{name}_f"])
-        swing_weights = _simpson_weights(SWING_INTERVALS, tau)
+        swing_weights = _simpson_weights(self.swing_intervals, tau)
         support_weights = _simpson_weights(self.intervals, d)
         tau_s = out["support_tau"]
         l1 = sum(float(swing_weights @ np.abs(ends[k].torques).sum(axis=1)) for k in SWING_ENDS)
@@ -302,26 +328,27 @@ class ActuatedSwingPlanner:
 
     def __init__(self, lasting) -> None:
         self.lasting = lasting
-        self.programs: dict[tuple[bool, str], ActuatedSwingProgram] = {}
+        self.programs: dict[tuple, ActuatedSwingProgram] = {}
 
-    def program(self, lasts: bool, effort: str) -> ActuatedSwingProgram:
-        key = (lasts, effort)
+    def program(self, lasts: bool, request: SwingRequest) -> ActuatedSwingProgram:
+        key = (lasts, request.support.effort, request.swing_intervals, request.bounded_between)
         if key not in self.programs:
             lp = self.lasting
-            self.programs[key] = ActuatedSwingProgram(lp.bm, INTERVALS["periodic"] if lasts else 1, effort,
-                                                      lp.friction, lp.exchange, lp.flow)
+            self.programs[key] = ActuatedSwingProgram(lp.bm, INTERVALS["periodic"] if lasts else 1,
+                                                      request.support.effort, lp.friction, lp.exchange, lp.flow,
+                                                      request.swing_intervals, request.bounded_between)
         return self.programs[key]
 
     def cycle(self, gait, request: SwingRequest, seed: LastingSupport | None = None,
               near: ActuatedSwingCycle | None = None) -> ActuatedSwingCycle:
         """``gait``'s cycle with the swing actuated for ``request.actuated_swing`` s at each end and a
         double support of ``request.support.duration`` s, started from a nearby cycle of the same
-        kind of double support (``near``: another tau, gait or d > 0), else from the impulsive cycle
+        program (``near``: another tau, gait or d > 0 on the same meshes), else from the impulsive cycle
         of the same d (``seed``, solved here if not given: ``LastingPlanner.periodic``)."""
         support = request.support
         boundary = self.lasting.boundary(gait)
-        program = self.program(support.duration > 0.0, support.effort)
-        if near is not None and (near.support.duration > 0.0) == (support.duration > 0.0):
+        program = self.program(support.duration > 0.0, request)
+        if near is not None and near.solution is not None and len(near.solution["x"]) == len(program.lbw):
             guess = program.sequences(near.solution)
         else:
             if seed is None:
@@ -348,7 +375,7 @@ class ActuatedSwingPlanner:
         values: dict[str, list] = {"xd_held": [held["xd_held"]], "p_old": [held["p_old"]], "p_new": [held["p_new"]]}
 
         def sample(name: str, t0: float) -> tuple[np.ndarray, np.ndarray]:
-            t = t0 + np.linspace(0.0, tau, 2 * SWING_INTERVALS + 1)
+            t = t0 + np.linspace(0.0, tau, 2 * request.swing_intervals + 1)
             q, qd = hermite_samples(nodes, t)
             step = 1e-4
             qdd = (hermite_samples(nodes, np.clip(t + step, 0.0, boundary.period))[1]

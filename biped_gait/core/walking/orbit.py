@@ -21,8 +21,9 @@ class PlannedOrbit:
     ground's spin moments change of the momentum about the feet line in the double support that
     ends the step (kg m^2/s; zero but for legs leaning, docs/model.md section 5.2), the trunk
     pitch theta of its touchdown configuration (rad), the radius of the circle it is a step
-    of (m, signed; inf: straight), and the double support that lasts at its end, to track
-    (``held_support.HeldSupport``; None: the paper's instantaneous one)."""
+    of (m, signed; inf: straight), the double support that lasts at its end, to track
+    (``held_support.HeldSupport``; None: the paper's instantaneous one), and the actuated ends of
+    its swing, to track (``swing_ends.SwingEnds``; None: the paper's ballistic swing)."""
 
     params: str
     step_length: float
@@ -42,6 +43,7 @@ class PlannedOrbit:
     theta: float = math.nan
     turn_radius: float = math.inf
     double_support: object = None
+    swing_ends: object = None
 
     def touchdown_error(self, q: np.ndarray, qd: np.ndarray) -> float:
         """max |(q, qd) - (q_T, qd_b)| (rad, rad/s): how far a touchdown state is from the plan's."""

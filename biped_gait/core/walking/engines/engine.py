@@ -35,15 +35,16 @@ class Pulse:
 
 @dataclass(frozen=True, eq=False)
 class Held:
-    """Both foot tips held (the closed chain ``chain``, core/dynamics/closed_chain.py), the actuated
-    joints driven by the feedback law ``law(t, q, qd)`` (N m; t in the step, s)."""
+    """The foot tips ``chain`` holds (both: the closed chain, core/dynamics/closed_chain.py; the
+    stance tip alone: the single support driven by joint torques, ``phases.pulse_dynamics.PinnedTip``),
+    the actuated joints driven by the feedback law ``law(t, q, qd)`` (N m; t in the step, s)."""
 
     chain: ClosedChain
     law: Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
     def acceleration(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-        """qdd (rad/s^2) of the closed chain at ``t`` (s in the step) in (``q``, ``qd``) under the
-        law's torques."""
+        """qdd (rad/s^2) of the chain at ``t`` (s in the step) in (``q``, ``qd``) under the law's
+        torques."""
         return self.chain.forward(q, qd, self.law(t, q, qd))[0]
 
 
@@ -51,7 +52,7 @@ class Held:
 class Motion:
     """What the engine integrates in a phase: the single-support tree (the stance tip held, the
     paper's model) driven by ``pulses`` (none: ballistic, as the paper's single support), or with
-    ``held`` both tips held and the joints driven by its law; ``h`` (s) the integration step of the
+    ``held`` the tips its chain holds and the joints driven by its law; ``h`` (s) the integration step of the
     planner's model (its RK8 grid in a single support: the aimed period over the walk's steps per
     period)."""
 

@@ -1,9 +1,10 @@
 """The planner's own model as the walk's engine (``engine:=hybrid``, docs/model.md sections 8.2,
 8.3): the ballistic single support by the planner's RK8 flow, one grid step h = T / grid per
 call, and the touchdown guard located on each step's quintic Hermite interpolant (Brent's
-method, 1e-14 s) and landed on by an exact RK8 step from the grid step's start; both feet held
-(the closed chain of a ``Held`` motion, its joints driven by its law) by the classical RK4, one
-step h per call. The samples are the interpolant's at their instants, on each side of a push's
+method, 1e-14 s) and landed on by an exact RK8 step from the grid step's start; the tips a
+``Held`` motion's chain holds (both feet: the closed chain; the stance tip alone: the single
+support driven by joint torques), its joints driven by its law, by the classical RK4, one step h
+per call (no touchdown located in it). The samples are the interpolant's at their instants, on each side of a push's
 velocity jump its own. The contact forces are not measured: the phases give them by the model's
 inverse dynamics.
 
@@ -43,8 +44,8 @@ class HybridSegment:
 
 def held_step(held: Held, t: float, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
               h: float) -> tuple[np.ndarray, np.ndarray]:
-    """One classical RK4 step of ``h`` s of the closed chain of ``held``, its joints driven by its
-    law at each stage, from (``q``, ``qd``) at ``t`` (s in the step) whose acceleration is ``qdd``."""
+    """One classical RK4 step of ``h`` s of the chain of ``held``, its joints driven by its law at
+    each stage, from (``q``, ``qd``) at ``t`` (s in the step) whose acceleration is ``qdd``."""
     rate = held.acceleration
     k1 = qd, qdd
     k2 = qd + h / 2 * k1[1], rate(t + h / 2, q + h / 2 * k1[0], qd + h / 2 * k1[1])
@@ -56,7 +57,7 @@ def held_step(held: Held, t: float, q: np.ndarray, qd: np.ndarray, qdd: np.ndarr
 
 class HybridEngine:
     """The engine of ``hybrid``'s model (module docstring): ballistic single supports, and phases
-    with both feet held (a single support with joint torques is refused)."""
+    whose tips a chain holds under a feedback law (a single support with torque pulses is refused)."""
 
     contact_friction = math.inf  # the planner's model holds the stance tip: its reaction is not checked
 

@@ -13,9 +13,21 @@ from __future__ import annotations
 import numpy as np
 
 from ...dynamics.closed_chain import ClosedChain
+from ..engines.engine import Held, Motion
 from ..events import Foot
 from ..state import WalkState
+from ..tracking import Tracking
 from .phase import Phase, WalkContext
+
+STEP = 1e-3  # s: the integration step (RK4) of a phase whose tips are held (standing's, whose balance's
+# closed loop is tens of 1/s; the tracked phases', up to about 1,350 1/s: h lambda = 1.35 within RK4's 2.78)
+
+
+def tracked(plan: Tracking, start: float) -> Motion:
+    """The motion of a phase that tracks ``plan`` from ``start`` (s in the step): its chain holds the
+    tips, its law drives the joints, in RK4 steps of ``STEP``."""
+    law = plan.law
+    return Motion(STEP, held=Held(plan.chain, lambda t, q, qd: law(t - start, q, qd)))
 
 
 class BothFeet(Phase):

@@ -26,14 +26,13 @@ from scipy.optimize import linprog
 
 from ...dynamics.closed_chain import ClosedChain, HeldImpact
 from ...dynamics.impulses import pyramid
-from ..engines.engine import Held, Motion
+from ..engines.engine import Motion
 from ..events import DOUBLE_SUPPORT, Fall
 from ..held_support import HeldSupport
 from ..state import WalkState
-from .held import BothFeet
+from .held import BothFeet, tracked
 from .phase import End, Guard, Phase, Transition, WalkContext
 from .reaim import LiftOff, impulsive_double_support
-from .standing import STEP  # the closed chain's integration step (RK4), standing's
 
 PRESS_TOLERANCE = 1e-9  # N s: a held impulse this close to the pyramid's faces is on them (HiGHS's feasibility)
 # The lift-off's re-aim starts from the tracked phase's error (a few tenths of a mrad), which the
@@ -132,8 +131,7 @@ class LastingDoubleSupport(BothFeet):
         return self.plan.chain
 
     def motion(self, ctx: WalkContext, state: WalkState) -> Motion:
-        start, law = self.start, self.plan.law
-        return Motion(STEP, held=Held(self.chain, lambda t, q, qd: law(t - start, q, qd)))
+        return tracked(self.plan, self.start)
 
     def guard(self, ctx: WalkContext, state: WalkState) -> Guard:
         return Guard(at=self.start + self.plan.duration)

@@ -30,9 +30,37 @@ def ground_reaction(hybrid: HybridStep, q: np.ndarray, qd: np.ndarray, torque: n
     """[Fx, Fy, Fz] (N, world axes of the step's model) at the stance tip, the joints driven by
     ``torque`` (nq, zero on the ankle): the extended model's inverse dynamics with the tip held."""
     bm = hybrid.bm
-    qdd = pin.aba(bm.single, bm.single_data, q, qd, torque)
+    return _stance_reaction(bm, q, qd, pin.aba(bm.single, bm.single_data, q, qd, torque))
+
+
+def _stance_reaction(bm, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """[Fx, Fy, Fz] (N) at the stance tip of the single support's motion (q, qd, qdd)."""
     x, xd, xdd = bm.extended_state(q), np.concatenate([np.zeros(3), qd]), np.concatenate([np.zeros(3), qdd])
     return pin.rnea(bm.extended, bm.extended_data, x, xd, xdd)[:3].copy()
+
+
+class PinnedTip:
+    """The single support driven by joint torques, the stance tip pinned (the paper's model with
+    torques, ``bm``): what the walk's tracking (``tracking``, ``balance.linearization``) and the
+    engine's held motions (``engines.engine.Held``) need of what holds the tips. No held rows: its
+    minimal coordinates are q. Not thread-safe (the model's Pinocchio data)."""
+
+    def __init__(self, bm) -> None:
+        self.bm = bm
+        self.actuated = np.asarray(bm.actuated)
+
+    def rows_of(self, q: np.ndarray) -> np.ndarray:
+        """No rows held beyond the tree's root."""
+        return np.zeros((0, self.bm.nq))
+
+    def forward(self, q: np.ndarray, qd: np.ndarray, torque: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """qdd (rad/s^2) and the stance tip's reaction [Fx, Fy, Fz] (N, world axes of the step's
+        model) under the actuated joints' ``torque`` (N m)."""
+        bm = self.bm
+        full = np.zeros(bm.nq)
+        full[self.actuated] = torque
+        qdd = pin.aba(bm.single, bm.single_data, q, qd, full)
+        return qdd, _stance_reaction(bm, q, qd, qdd)
 
 
 def pulse(hybrid: HybridStep, q: np.ndarray, qd: np.ndarray, torque: np.ndarray, duration: float,

@@ -40,7 +40,7 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
     state by the effort LP, then the leg exchange; ``lift_off``: from a double support that lasts
     (None: a touchdown). The next step's start and the touchdown report; ``Fall`` if no re-aim or
     no impulses reach it."""
-    hybrid, feedback, bm, s = ctx.hybrid, ctx.feedback, ctx.hybrid.bm, state
+    feedback, s = ctx.feedback, state
     error = s.aim.orbit.touchdown_error(q_td, qd_td)
     side = other_side(s.stance_side)
     try:
@@ -53,13 +53,7 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
         aim, xd_a, sol, planned, miss = _double_support(ctx, s, q_td, qd_td, t_step,
                                                         feedback.advanced(replace(s.aim, pending=None), side), error,
                                                         lift_off)
-    # The new stance foot's world position, then the mirror: the next step in model coordinates.
-    new_foot = s.stance_foot + s.axes @ bm.swing_tip(q_td)
-    new_foot[2] = 0.0
-    exchange = hybrid.exchange
-    following = WalkState(q=exchange.configuration(q_td), qd=exchange.velocity(q_td, xd_a), aim=aim, step=s.step + 1,
-                          t=s.t + t_step, stance_side=side, stance_foot=new_foot,
-                          heading=next_heading(s.heading, side, exchange.heading(q_td)))
+    following = exchanged(ctx, s, q_td, xd_a, t_step, aim)
     touchdown = Touchdown(
         step=s.step, t=s.t + t_step, t_step=t_step, i_minus=sol.i_minus.copy(), i_plus=sol.i_plus.copy(),
         W=sol.W, state_error=error, velocity_miss=abs(miss),
@@ -67,6 +61,20 @@ def impulsive_double_support(ctx: WalkContext, state: WalkState, q_td: np.ndarra
         next_stance_side=side,
     )
     return following, touchdown
+
+
+def exchanged(ctx: WalkContext, s: WalkState, q: np.ndarray, xd: np.ndarray, t_step: float, aim) -> WalkState:
+    """The next step's start after a double support that ends ``t_step`` s into ``s``'s step in
+    the posture ``q`` with the double-support velocity ``xd`` (the new stance tip at rest), aiming at
+    ``aim``: the new stance foot's world position, then the mirror (the next step in its model
+    coordinates)."""
+    side = other_side(s.stance_side)
+    new_foot = s.stance_foot + s.axes @ ctx.hybrid.bm.swing_tip(q)
+    new_foot[2] = 0.0
+    exchange = ctx.hybrid.exchange
+    return WalkState(q=exchange.configuration(q), qd=exchange.velocity(q, xd), aim=aim, step=s.step + 1,
+                     t=s.t + t_step, stance_side=side, stance_foot=new_foot,
+                     heading=next_heading(s.heading, side, exchange.heading(q)))
 
 
 def _double_support(ctx: WalkContext, s: WalkState, q_td: np.ndarray, qd_td: np.ndarray, t_step: float, aim,

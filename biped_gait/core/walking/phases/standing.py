@@ -18,11 +18,10 @@ from ..balance import Balance
 from ..engines.engine import Held, Motion
 from ..events import STANDING
 from ..state import WalkState
-from .held import BothFeet
+from .held import STEP, BothFeet
 from .phase import End, Guard, Transition, WalkContext
 
 CHUNK = 0.1  # s: a standing phase ends (and begins again) this often, its samples streamed
-STEP = 1e-3  # s: the closed chain's integration step (RK4; the balance's closed loop is tens of 1/s)
 
 
 @dataclass(frozen=True, eq=False)

@@ -1,0 +1,117 @@
+"""A planned motion the walk tracks (docs/model.md sections 14.1, 15.1): the plan's collocation
+samples as a reference, and the LQR about it.
+
+**The reference.** The plan's collocation points (nodes and midpoints of its Hermite-Simpson
+intervals) carry q, qd, qdd and the torques Gamma; between them q and qd are the cubic Hermite
+interpolants of (q, qd) and (qd, qdd), Gamma the linear one (``HeldSupport``'s, with which the
+lasting walk was measured) or the quadratic through each interval's node, midpoint and node, the
+rule's own (``swing_ends.SwingReference``: docs/model.md 15.1 says why).
+
+**The feedback** is the standing balance's LQR machinery (``balance``) about the reference: at
+each sample the dynamics linearized there (its state and torques), in the minimal coordinates
+of the held rows there, Bryson's weights; at time t the gain K and basis N of the nearest sample,
+and the torques
+
+    Gamma = Gamma*(t) - K [N'(q - q*(t)); N'(qd - qd*(t))],
+
+each within its joint's effort limit.
+
+**What holds the tips** (``chain``): the closed chain of a double support (both tips held,
+core/dynamics/closed_chain.py) or the single support driven by joint torques (the stance tip
+pinned, ``phases.pulse_dynamics.PinnedTip``); of it the reference needs its model ``bm``, its
+``actuated`` joints, its forward dynamics ``forward(q, qd, torque)`` (qdd and the held tips'
+reaction) and its held rows ``rows_of(q)`` (none for the pinned tip: its minimal coordinates are q).
+
+Times in the tracked phase (s from its start); q, qd in the step's model coordinates. Units SI, rad.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline
+
+from .balance import effort_limits, linearization, lqr_gain, minimal_basis
+
+RESOLUTION_STEP = 1e-3  # s: the reference is checked this often (``Tracking.along``), the walk's step
+# Bryson's weights of the tracking: the lift-off's state error is amplified about 150-fold by the
+# next ballistic step, whose re-aim converges from a few mrad; standing's 0.1 rad and 1 rad/s left
+# 2 mrad and 13 mrad/s at the lift-off of the default gait, too far for the re-aim's chord steps.
+# In the double support these give closed-loop eigenvalues up to about 810 1/s (h lambda = 0.8 at
+# the 1 ms step; the slowest, the roll over the feet line, stays near its open-loop 2.9 1/s).
+POSITION_SCALE = 1e-2  # rad
+RATE_SCALE = 1e-1  # rad/s
+
+
+@dataclass(frozen=True, eq=False)
+class Tracking:
+    """A planned phase of ``duration`` s to track (module docstring): what holds the tips
+    (``chain``), the samples ``t`` (s in the phase), ``q``, ``qd``, ``qdd`` (rows, the step's
+    coordinates) and ``torques`` (N m, actuated joints), and the feedback (at the instants
+    ``gain_t``, s in the phase, the minimal coordinates' ``basis`` and the ``gain``; the joints'
+    effort ``limits``)."""
+
+    chain: object
+    duration: float
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    torques: np.ndarray
+    gain_t: np.ndarray
+    basis: np.ndarray
+    gain: np.ndarray
+    limits: np.ndarray
+
+    @cached_property
+    def _splines(self) -> tuple[CubicHermiteSpline, CubicHermiteSpline]:
+        return CubicHermiteSpline(self.t, self.q, self.qd), CubicHermiteSpline(self.t, self.qd, self.qdd)
+
+    def reference(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """q*, qd* and Gamma* at ``t`` (s in the phase, clamped to it)."""
+        t = min(max(t, 0.0), self.duration)
+        q, qd = (spline(t) for spline in self._splines)
+        return q, qd, self.torque(t)
+
+    def torque(self, t: float) -> np.ndarray:
+        """Gamma*(t) (N m; ``t`` s in the phase, within it): linear between the samples."""
+        return np.array([np.interp(t, self.t, column) for column in self.torques.T])
+
+    def along(self) -> Iterator[tuple[float, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+        """The reference every ``RESOLUTION_STEP`` or less over the phase, both ends included: t, q*,
+        qd*, Gamma* and the chain's forward dynamics there (qdd and the held reaction). At the
+        collocation points they are the plan's own; between them they say whether the plan's mesh
+        resolves the phase (Hermite-Simpson can ring between its points, docs/model.md 14)."""
+        for t in np.linspace(0.0, self.duration, math.ceil(self.duration / RESOLUTION_STEP) + 1):
+            q, qd, torque = self.reference(float(t))
+            qdd, held = self.chain.forward(q, qd, torque)
+            yield float(t), q, qd, torque, qdd, held
+
+    def law(self, t: float, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+        """The actuated joints' torques (N m) at ``t`` (s in the phase) in (``q``, ``qd``): the
+        gain and basis of the instant nearest ``t``."""
+        q_ref, qd_ref, torque = self.reference(t)
+        k = int(np.argmin(np.abs(self.gain_t - t)))
+        basis = self.basis[k]
+        error = np.concatenate([basis.T @ (q - q_ref), basis.T @ (qd - qd_ref)])
+        return np.clip(torque - self.gain[k] @ error, -self.limits, self.limits)
+
+
+def tracking(chain, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, torques: np.ndarray,
+             cls: type = Tracking, **extra) -> Tracking:
+    """The ``Tracking`` (or its subclass ``cls``, its further fields ``extra``) of the samples ``t``
+    (s, from 0), ``q``, ``qd``, ``qdd`` and ``torques`` of a phase held by ``chain``: at each sample
+    the minimal basis and the LQR gain of the dynamics frozen there (module docstring)."""
+    limits = effort_limits(chain)
+    bases, gains = [], []
+    for k in range(len(t)):
+        basis = minimal_basis(chain, q[k])
+        a, b = linearization(chain, q[k], qd[k], torques[k], basis)
+        bases.append(basis)
+        gains.append(lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE))
+    t = np.asarray(t)
+    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), np.array(gains), limits, **extra)
