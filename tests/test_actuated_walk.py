@@ -3,7 +3,9 @@ core/walking/swing_ends.py, docs/model.md section 15.1): the reference of each a
 between its collocation points, the actuated start tracked from the plan's lift-off, the first step
 landed, held and lifted off with the state continuous; and where the walk does not hold yet (the
 rotation over the stance tip, which no joint torque drives, drifts from the time-indexed plan, more
-each step, and the fourth planned touchdown finds the swing tip above the ground).
+each step, and the fourth planned touchdown finds the swing tip above the ground), and what in the
+plan keeps its timing from being freed (the swing tip comes down on the ground twice in the actuated
+end, tangentially; the passive ankle's pitch peaks before the touchdown).
 
 The plan (``SwingRequest.walkable``: 20 intervals over each end, the torques within their limits
 between the points, the double support's margins) is solved once, (tau, d) = (0.1, 0.1) s at the
@@ -120,6 +122,28 @@ def test_the_first_step_lands_and_lifts_off(planned):
     assert np.max(np.abs(lifted.state.q - matrix @ last.q)) < 1e-12
     assert np.max(np.abs(lifted.state.qd - matrix @ last.qd)) < 1e-12
     assert isinstance(lifted.phase, ActuatedStart) and lifted.state.t_step == 0.0
+
+
+def test_the_planned_touchdown_gives_no_clock_to_free_the_timing(planned):
+    """Why the walk's timing cannot simply be freed on this plan (docs/model.md 15.1, what was
+    tried): along the actuated end's reference (every 0.1 ms) the swing tip comes down onto the
+    ground a first time in the end's middle (measured 5.9 um below it between the points near
+    0.036 s, on it at the point 0.035 s: the plan's non-penetration is held at the points only),
+    rises again (1.77 mm near 0.07 s) and comes down tangentially (on the ground at 0.095 s and at
+    T), so a touchdown located where the tip reaches the ground fires mid-end or at an
+    ill-conditioned instant; and the passive stance ankle's pitch, the phase variable of hybrid
+    zero dynamics, peaks before T (0.2516 rad at 0.093 s) and falls back (0.2507 at T), so it
+    orders no instant of the last 7 ms."""
+    planner, _, orbit = planned
+    bm, end = planner.model, orbit.swing_ends.end
+    t = np.linspace(0.0, TAU, 1001)
+    states = [end.reference(s)[0] for s in t]
+    height = np.array([bm.swing_tip(q)[2] for q in states])
+    middle, rise = (t > 0.03) & (t < 0.045), (t > 0.05) & (t < 0.09)
+    assert -2e-5 < height[middle].min() < 1e-5 and height[rise].max() > 1.5e-3
+    assert abs(height[950]) < 1e-6 and abs(height[-1]) < 1e-6  # t = 0.095 s and T
+    pitch = np.array([q[bm.index("ankle_pitch")] for q in states])
+    assert 0.085 < t[np.argmax(pitch)] < TAU - 0.003 and pitch.max() - pitch[-1] > 5e-4
 
 
 def test_the_rotation_over_the_stance_tip_drifts_until_a_touchdown_misses(planned):
