@@ -26,7 +26,7 @@ from pathlib import Path
 
 from ..arguments import OneLineParser
 from ..recording import topics
-from .environment import DISCOVERY_VARIABLE
+from .environment import keep_discovery_local
 from .live_view import DEFAULT_PORT
 from .parameters import PARAMS_KEY, check_parameters_file
 
@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         print(f"biped-gait-launch: error: {exc}", file=sys.stderr)
         return 2
-    os.environ.setdefault(DISCOVERY_VARIABLE, "LOCALHOST")
+    keep_discovery_local()
     sections = {node.strip("/"): section.get(PARAMS_KEY, {}) for node, section in document.items()}
     record_dir = args.record_dir or Path(str(sections.get("biped_gait_simulator", {}).get("record_dir",
                                                                                         topics.RECORD_DIR)))

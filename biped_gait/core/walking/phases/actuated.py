@@ -34,7 +34,7 @@ from ..events import DOUBLE_SUPPORT, Fall, Touchdown
 from ..state import WalkState
 from ..tracking import Tracking
 from .held import tracked
-from .lasting import LastingDoubleSupport, LastingTouchdown, held_landing
+from .lasting import LastingDoubleSupport, held_touchdown
 from .phase import TOUCHDOWN, End, Guard, Phase, Transition, WalkContext
 from .pulse_dynamics import ground_reaction
 from .reaim import exchanged
@@ -106,17 +106,14 @@ class ActuatedEnd(ActuatedSwing):
     support, which lifts off into the next step's actuated start."""
 
     def reset(self, ctx: WalkContext, state: WalkState, end: End) -> Transition:
-        orbit = state.aim.orbit
-        plan = orbit.double_support
+        plan = state.aim.orbit.double_support
         chain = plan.chain
         when = f"at the planned touchdown, t = {state.t + end.t:.4f} s"
         height = float(chain.bm.swing_tip(end.q)[2])
         if abs(height) > TOUCHDOWN_HEIGHT:
             raise Fall(f"{when}, the swing tip is {abs(height) * 1e3:.2f} mm {'above' if height > 0 else 'below'} "
                        "the ground")
-        i_minus, held = held_landing(plan, end.q, end.qd)
-        report = LastingTouchdown(state.t + end.t, orbit.touchdown_error(end.q, end.qd), plan.duration, i_minus,
-                                  plan.i_minus, held.old, held.new)
+        report, held = held_touchdown(plan, state, end)
         aim = ctx.feedback.advanced(state.aim, other_side(state.stance_side))
         after = ActuatedStart(aim.orbit.swing_ends.start, 0.0)
         return Transition(ContinuousLiftOff(plan, end.t, report, after), state.moved(end.t, end.q, held.qd))

@@ -95,6 +95,15 @@ def held_landing(plan: HeldSupport, q: np.ndarray, qd: np.ndarray) -> tuple[np.n
     return i_minus, chain.impact(q, qd + jump @ i_minus)
 
 
+def held_touchdown(plan: HeldSupport, state: WalkState, end: End) -> tuple[LastingTouchdown, HeldImpact]:
+    """The touchdown ``end`` of ``state``'s step onto the double support ``plan``: the I^- that lands
+    it (``held_landing``) and what it did, and the held impact."""
+    i_minus, held = held_landing(plan, end.q, end.qd)
+    report = LastingTouchdown(state.t + end.t, state.aim.orbit.touchdown_error(end.q, end.qd), plan.duration, i_minus,
+                              plan.i_minus, held.old, held.new)
+    return report, held
+
+
 @dataclass(frozen=True, eq=False)
 class HeldTouchdown(Phase):
     """The touchdown onto a double support that lasts: I^- and the held impact (module docstring);
@@ -107,10 +116,8 @@ class HeldTouchdown(Phase):
         return None
 
     def reset(self, ctx: WalkContext, state: WalkState, end: End) -> Transition:
-        orbit = state.aim.orbit
-        plan = orbit.double_support
-        i_minus, held = held_landing(plan, end.q, end.qd)
-        report = LastingTouchdown(state.t + end.t, orbit.touchdown_error(end.q, end.qd), plan.duration, i_minus, plan.i_minus, held.old, held.new)
+        plan = state.aim.orbit.double_support
+        report, held = held_touchdown(plan, state, end)
         return Transition(LastingDoubleSupport(plan, end.t, report, self.after), state.moved(end.t, end.q, held.qd))
 
 
