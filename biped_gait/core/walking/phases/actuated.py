@@ -57,7 +57,7 @@ class ActuatedSwing(Phase):
         return self.plan.chain.bm.params.friction
 
     def motion(self, ctx: WalkContext, state: WalkState) -> Motion:
-        return tracked(self.plan, self.start)
+        return tracked(self.plan, self.start, guard=True)
 
     def guard(self, ctx: WalkContext, state: WalkState) -> Guard:
         return Guard(at=self.start + self.plan.duration)
@@ -126,6 +126,10 @@ class ContinuousLiftOff(LastingDoubleSupport):
     actuated start)."""
 
     kind = DOUBLE_SUPPORT
+
+    def motion(self, ctx: WalkContext, state: WalkState) -> Motion:
+        """The lasting double support's, its torques guarded (``reaction_guard``)."""
+        return tracked(self.plan, self.start, guard=True)
 
     def reset(self, ctx: WalkContext, state: WalkState, end: End) -> Transition:
         """The lift-off: the next step starts in the phase's end state mirrored (the new stance tip

@@ -15,6 +15,7 @@ import numpy as np
 from ...dynamics.closed_chain import ClosedChain
 from ..engines.engine import Held, Motion
 from ..events import Foot
+from ..reaction_guard import guarded_torque
 from ..state import WalkState
 from ..tracking import Tracking
 from .phase import Phase, WalkContext
@@ -23,11 +24,14 @@ STEP = 1e-3  # s: the integration step (RK4) of a phase whose tips are held (sta
 # closed loop is tens of 1/s; the tracked phases', up to about 1,350 1/s: h lambda = 1.35 within RK4's 2.78)
 
 
-def tracked(plan: Tracking, start: float) -> Motion:
+def tracked(plan: Tracking, start: float, guard: bool = False) -> Motion:
     """The motion of a phase that tracks ``plan`` from ``start`` (s in the step): its chain holds the
-    tips, its law drives the joints, in RK4 steps of ``STEP``."""
-    law = plan.law
-    return Motion(STEP, held=Held(plan.chain, lambda t, q, qd: law(t - start, q, qd)))
+    tips, its law drives the joints (with ``guard``, its torques kept where the held tips' reactions
+    stay within the floor's reach, ``reaction_guard``), in RK4 steps of ``STEP``."""
+    chain, law, limits = plan.chain, plan.law, plan.limits
+    if guard:
+        return Motion(STEP, held=Held(chain, lambda t, q, qd: guarded_torque(chain, q, qd, law(t - start, q, qd), limits)))
+    return Motion(STEP, held=Held(chain, lambda t, q, qd: law(t - start, q, qd)))
 
 
 class BothFeet(Phase):
