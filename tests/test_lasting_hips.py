@@ -4,14 +4,15 @@ own leg exchange and the planner's flow, independently of the program's symbols;
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pinocchio as pin
 import pytest
 
+from biped_gait.cli import main as cli_main
 from biped_gait.core.gait.lasting import LastingRequest
 from biped_gait.core.gait.lasting_support import IMPULSE_TIME
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
@@ -25,18 +26,44 @@ STEP = 1e-6  # rad, m: the heading's central differences (their error about 1e-1
 
 
 @pytest.fixture(scope="module")
-def planner() -> GaitPlanner:
-    return GaitPlanner("aoustin2013-hips", modes=("normal",))
+def planned():
+    """``biped-gait plan --params aoustin2013-hips --double-support 0.1`` run in this process: its
+    exit status and printout, and the planner, gait and cycle its ``GaitPlanner.lasting_cycle``
+    returned (recorded on their way through, unchanged). The module's one solve of the cycle: the
+    tests below check the very cycle the command summed up."""
+    made = []
+    lasting_cycle = GaitPlanner.lasting_cycle
+
+    def recorded(planner, gait, request):
+        support, limit = lasting_cycle(planner, gait, request)
+        made.append((planner, gait, request, support))
+        return support, limit
+
+    printed = io.StringIO()
+    with pytest.MonkeyPatch.context() as patch, contextlib.redirect_stdout(printed):
+        patch.setattr(GaitPlanner, "lasting_cycle", recorded)
+        status = cli_main(["plan", "--params", "aoustin2013-hips", "--double-support", "0.1"])
+    [(planner, gait, request, cycle)] = made
+    # the command's defaults are the paper's gait (DEFAULT), normal, its request the walkable cycle's
+    assert (gait.params, gait.mode.value, gait.step_length, gait.period) == ("aoustin2013-hips", "normal", 0.45, 0.45)
+    assert gait.arm_amplitude == pytest.approx(DEFAULT.arm_amplitude, abs=1e-15)
+    assert request == LastingRequest.walkable(0.1)
+    return status, printed.getvalue(), planner, gait, cycle
 
 
 @pytest.fixture(scope="module")
-def gait(planner):
-    return planner.plan(DEFAULT)
+def planner(planned) -> GaitPlanner:
+    return planned[2]
 
 
 @pytest.fixture(scope="module")
-def cycle(planner, gait):
-    return planner.lasting.periodic(gait, LastingRequest.walkable(0.1))
+def gait(planned):
+    return planned[3]
+
+
+@pytest.fixture(scope="module")
+def cycle(planned):
+    return planned[4]
 
 
 def _heading(bm: BipedModel, x: np.ndarray) -> float:
@@ -112,9 +139,8 @@ def test_the_hips_cycle_is_periodic_and_straight(planner, gait, cycle):
     assert np.max(np.abs(exchange.velocity(q_lift, xd_a) - cycle.next_start_velocity)) < 1e-7
 
 
-def test_the_plan_answers_for_the_hips():
+def test_the_plan_answers_for_the_hips(planned):
     """``biped-gait plan --double-support 0.1`` for the 13-joint set: the lasting cycle's summary."""
-    proc = subprocess.run([sys.executable, "-m", "biped_gait.cli", "plan", "--params", "aoustin2013-hips",
-                           "--double-support", "0.1"], capture_output=True, text=True, timeout=900)
-    assert proc.returncode == 0, proc.stderr
-    assert "double support of 0.1 s: E = " in proc.stdout, proc.stdout
+    status, printed = planned[:2]
+    assert status == 0, printed
+    assert "double support of 0.1 s: E = " in printed, printed

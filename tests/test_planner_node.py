@@ -108,7 +108,7 @@ BAD_REQUESTS = [
     (plan_request(params="/etc/hostname"), "unknown parameter set"),
     (plan_request(closure="loose"), "unknown closure"),
     (plan_request(effort="l7"), "unknown effort"),
-    (plan_request(period=5.0), "ballistic BVP"),  # a 5 s ballistic step diverges: no convergence
+    (plan_request(period=1.5), "ballistic BVP"),  # a 1.5 s ballistic step diverges: no convergence
 ]
 
 

@@ -2,9 +2,9 @@
 # The README's test command: set up (if needed), then run the whole test suite. ROS processes
 # keep discovery on this machine; tests/conftest.py gives the session a domain of its own.
 # The tests run in one pytest-xdist worker per core, a test module to a worker (its module's
-# nodes and gaits made once), each worker in a ROS domain of its own; a test marked `paced`
-# runs with no other beside it (tests/conftest.py). `-n 0` runs them in this process, as `-s`
-# (output shown) does.
+# nodes and gaits made once), the longest modules first (tests/conftest.py), each worker in a ROS
+# domain of its own; a test marked `paced` runs with no other beside it (tests/conftest.py).
+# `-n 0` runs them in this process, as `-s` (output shown) does.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export VENV=${VENV:-.venv}  # the venv, and PYTHON the interpreter that makes it (tools/setup.sh)
@@ -16,7 +16,7 @@ export FASTDDS_BUILTIN_TRANSPORTS=UDPv4  # UDP on loopback alone (biped_gait/ros
 # an old client. Fast DDS's own tool removes only those whose owner is gone (their lock is free),
 # so other sessions' nodes keep theirs.
 "$VENV"/bin/fastdds shm clean > /dev/null 2>&1 || true
-parallel=(-n auto --dist loadscope)
+parallel=(-n auto --dist loadscope --no-loadscope-reorder)
 for arg in "$@"; do
   case $arg in -s | --capture=no | -n | -n* | --numprocesses*) parallel=() ;; esac
 done
