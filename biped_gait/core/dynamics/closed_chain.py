@@ -157,12 +157,11 @@ class ClosedChain:
             return first
         from scipy.optimize import minimize_scalar  # SciPy's optimizers only where a walk holds both feet
 
-        tip_x = self.bm.swing_tip(q)[0]
+        share = self.lateral_share(q)
 
         def at(lateral: float) -> np.ndarray:
-            """``wrenches`` with the new tip's lateral force ``lateral``: affine in it (the new tip
-            takes it, the old tip the rest, with its moment about the vertical)."""
-            return first + lateral * np.array([[0.0, -1.0, 0.0, -tip_x], [0.0, 1.0, 0.0, 0.0]])
+            """``wrenches`` with the new tip's lateral force ``lateral``: affine in it."""
+            return first + lateral * share
 
         def ratio(lateral: float) -> float:
             w = at(lateral)
@@ -172,6 +171,12 @@ class ClosedChain:
             return first
         reach = abs(first[0, 1]) + np.abs(first[:, :2]).sum()
         return at(minimize_scalar(ratio, bounds=(-reach, reach), method="bounded", options={"xatol": 1e-9}).x)
+
+    def lateral_share(self, q: np.ndarray) -> np.ndarray:
+        """The change of ``wrenches`` (2 x 4) per newton of the new tip's lateral force at ``q``, with
+        legs of pitch joints only (the motion does not determine it): the new tip takes it, the old
+        tip the rest, with its moment about the vertical."""
+        return np.array([[0.0, -1.0, 0.0, -self.bm.swing_tip(q)[0]], [0.0, 1.0, 0.0, 0.0]])
 
     def full_force(self, held: np.ndarray, lateral: float = 0.0) -> np.ndarray:
         """The new tip's reaction with all its components from its held rows (``lateral``: the free
