@@ -17,7 +17,9 @@ from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 from rclpy.serialization import deserialize_message, serialize_message  # noqa: E402
 from std_msgs.msg import Header  # noqa: E402
 
+from biped_gait.core.gait.actuated_swing import ActuatedSwingCycle, SwingEnd, cycle_view  # noqa: E402
 from biped_gait.core.gait.configurations import GaitMode  # noqa: E402
+from biped_gait.core.gait.lasting_support import LastingSupport  # noqa: E402
 from biped_gait.core.gait import views  # noqa: E402
 from biped_gait.core.gait.views import FIELDS  # noqa: E402
 from biped_gait.core.gait.planner import GaitRequest  # noqa: E402
@@ -25,7 +27,7 @@ from biped_gait.core.walking.orbit import PlannedOrbit  # noqa: E402
 from biped_gait.recording.topics import MODE_CODES, EventKind  # noqa: E402
 from biped_gait.ros.conversions import (OPTION_NAMES, PHASE_NAMES, POINT_NAMES, gait_fields, mode_from_msg,  # noqa: E402
                                         orbit_from_msg, phase_msg, plan_msg, request_from_msg, request_key,
-                                        urdf_joints)
+                                        swing_cycle_from_msg, swing_phases_msg, urdf_joints)
 
 pytestmark = pytest.mark.ros
 
@@ -53,7 +55,7 @@ def test_every_message_field_of_the_field_list_carries_the_core_value(planner, d
         checked += 1
     # every GaitPlan field but the header, the mode code, the reasons and the trajectory with its joint mapping
     trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs", "stride_effort",
-                  "double_support_phase"}  # the last: a lasting double support's, test_the_phase_message_...
+                  "double_support_phase", "swing_phases"}  # the last two: test_the_phase_message_..., test_the_swing_...
     assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons"} - trajectory)
     assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
     assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)
@@ -77,14 +79,72 @@ def test_the_phase_message_is_the_plan_jsons_double_support_phase(planner, defau
     limit = planner.lasting.limit(default_gait)
     phase = views.double_support_phase(limit, limit.effort_total)
     msg = deserialize_message(serialize_message(phase_msg(phase)), DoubleSupportPhase)
-    assert {PHASE_NAMES.get(key, key) for key in phase} == set(DoubleSupportPhase.get_fields_and_field_types())
-    for key, value in phase.items():
-        got = getattr(msg, PHASE_NAMES.get(key, key))
+    assert_carries(msg, phase)
+    assert len(msg.held_impact_impulses) == 6 and len(msg.i_minus) == 7 and list(msg.next_start_velocity) == []
+
+
+def assert_carries(msg, figures: dict, beyond: tuple[str, ...] = ()) -> None:
+    """``msg`` has every figure of the plan JSON's ``figures`` and nothing else but its fields
+    ``beyond``, each carried exactly (arrays flattened row by row; none: an empty array, a number NaN)."""
+    types = type(msg).get_fields_and_field_types()
+    assert {PHASE_NAMES.get(key, key) for key in figures} | set(beyond) == set(types)
+    for key, value in figures.items():
+        name = PHASE_NAMES.get(key, key)
+        got = getattr(msg, name)
         if isinstance(value, (str, bool, int)):
             assert got == value, key
         else:
-            assert np.array_equal(np.ravel(got), np.ravel(value if value is not None else [])), key
-    assert len(msg.held_impact_impulses) == 6 and len(msg.i_minus) == 7 and list(msg.next_start_velocity) == []
+            none = [] if types[name].startswith("sequence") else math.nan
+            assert np.array_equal(np.ravel(got), np.ravel(value if value is not None else none), equal_nan=True), key
+
+
+def random_cycle(bm, rng: np.random.Generator) -> ActuatedSwingCycle:
+    """A cycle whose swing is actuated at its two ends with random figures in ``bm``'s shapes
+    (41 samples per end, as the walkable plan's; 5 in the double support), its flight's ends the
+    ends' meeting states."""
+    nx, na, at = len(bm.ds_names), len(bm.actuated_names), bm.ds_of_single
+
+    def samples(n: int, t0: float, *forces: int) -> list[np.ndarray]:
+        return [t0 + np.linspace(0.0, 0.1, n), *rng.normal(size=(3, n, nx)), 200.0 * rng.uniform(-1.0, 1.0, (n, na)),
+                rng.uniform(1.0, 2.0, (n, *forces, 3))]
+
+    start, end = SwingEnd(*samples(41, 0.0)), SwingEnd(*samples(41, 0.35))
+    support = LastingSupport(0.1, True, "solved", *samples(5, 0.0, 2), np.zeros(na), np.zeros(na),
+                             rng.normal(size=(2, 3)), 3.5, 170.0, 3.5, 0, 0.0)
+    return ActuatedSwingCycle(0.1, True, "solved", start, end, support, np.concatenate([start.x[-1, at], start.xd[-1, at]]),
+                              np.concatenate([end.x[0, at], end.xd[0, at]]), 89.5, 1.1e5, 193, 53.0)
+
+
+def test_the_swing_phases_message_is_the_plan_jsons_and_gives_the_cycle_back(planner, default_gait):
+    """SwingPhases has every figure of the plan JSON's actuated swing (``cycle_view``: its
+    swing_phases, each end a SwingPhase, and the cycle's figures) and nothing else, each carried
+    exactly over serialization, its double support DoubleSupportPhase's; ``swing_cycle_from_msg``
+    gives the cycle back, the flight's ends from the ends' samples; a plan without it gives None. A
+    cycle of random figures in the model's shapes (no solve: tests/test_actuated_ros.py reads a
+    solved one)."""
+    cycle = random_cycle(planner.model, np.random.default_rng(35))
+    view = cycle_view(cycle)
+    plan = plan_msg(default_gait, Header(), urdf_joints(planner.model))
+    assert swing_cycle_from_msg(plan) is None and plan.swing_phases.actuated_swing == 0.0
+    plan.swing_phases, plan.double_support_phase = swing_phases_msg(view), phase_msg(view["double_support_phase"])
+    plan = deserialize_message(serialize_message(plan), GaitPlan)
+    phases = view["swing_phases"]
+    figures = {key: value for key, value in view.items() if key not in ("swing_phases", "double_support_phase")}
+    assert_carries(plan.swing_phases, {**figures, "success": phases["success"], "message": phases["message"]},
+                   beyond=("start", "end"))
+    for which in ("start", "end"):
+        assert_carries(getattr(plan.swing_phases, which), phases[which])
+    assert_carries(plan.double_support_phase, view["double_support_phase"])
+    back = swing_cycle_from_msg(plan)
+    for which in ("start", "end"):
+        for name in ("t", "x", "xd", "xdd", "torques", "contact_forces"):
+            assert np.array_equal(getattr(getattr(back, which), name), getattr(getattr(cycle, which), name)), name
+    for name in ("t", "x", "xd", "xdd", "torques", "contact_forces", "held_impact_impulses"):
+        assert np.array_equal(getattr(back.support, name), getattr(cycle.support, name)), name
+    assert np.array_equal(back.flow_start, cycle.flow_start) and np.array_equal(back.flow_end, cycle.flow_end)
+    assert np.array_equal(back.peak_torque, cycle.peak_torque) and back.friction_used == cycle.friction_used
+    assert (back.actuated_swing, back.success, back.message, back.effort_l1, back.effort_l2, back.iterations,
+            back.solve_time_s) == (0.1, True, "solved", 89.5, 1.1e5, 193, 53.0)
 
 
 def test_the_orbit_a_walk_needs_survives_the_message(planner, default_gait):

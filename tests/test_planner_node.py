@@ -331,6 +331,9 @@ def test_a_default_constructed_request_plans_the_default_gait(ros, planner, defa
     assert phase.duration == 0.0 and not phase.success and phase.effort_total == 0.0
     assert all(len(getattr(phase, name)) == 0 for name in ("t", "x", "torques", "contact_forces", "i_minus",
                                                            "held_impact_impulses", "next_start_velocity"))
+    swing = plan.swing_phases  # actuated_swing 0: the paper's ballistic swing, no actuated end
+    assert swing.actuated_swing == 0.0 and not swing.success and len(swing.peak_torque) == 0
+    assert len(swing.start.t) == len(swing.end.torques) == 0
 
 
 # Each float field of PlanGait.Request set to 0 in an otherwise default request: what 0 means
@@ -347,6 +350,7 @@ ZERO_MEANS = {
     "step_width": "default",
     "turn_radius": "default",
     "double_support": "default",  # 0 is a value: the paper's instantaneous double support, the default
+    "actuated_swing": "default",  # 0 is a value: the paper's ballistic swing with its impulses, the default
 }
 
 

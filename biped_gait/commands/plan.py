@@ -11,7 +11,7 @@ from pathlib import Path
 from ..arguments import check_output_folder, request_fields
 from ..core.gait import views
 from ..core.gait.lasting_support import LastingSupport
-from ..core.gait.planner import GaitPlanner, GaitRequest, lasting_request
+from ..core.gait.planner import GaitPlanner, GaitRequest, lasting_request, swing_request
 from .output import check_json, write_json
 
 JSON_NAME = "plan.json"
@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
     fields = request_fields(args, exclude=("params",))
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
     lasting = lasting_request(request, args.double_support)
-    swing = swing_request(args.actuated_swing, args.double_support, request)
+    swing = swing_request(request, args.actuated_swing, args.double_support)
     planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
         gait = planner.plan_stride(request)
@@ -37,9 +37,9 @@ def run(args: argparse.Namespace) -> int:
         result, drawn = views.to_dict(gait), gait
     admissible = gait.admissible
     if swing is not None and gait.usable:
-        from ..core.gait.actuated_swing import ActuatedSwingPlanner, cycle_view  # CasADi only when asked
+        from ..core.gait.actuated_swing import cycle_view  # CasADi only when asked
 
-        cycle = ActuatedSwingPlanner(planner.lasting).cycle(gait, swing)
+        cycle = planner.actuated_swing.cycle(gait, swing)
         print(swing_summary(cycle, gait.W))
         result.update(cycle_view(cycle))
         admissible = admissible and cycle.success
@@ -58,24 +58,6 @@ def run(args: argparse.Namespace) -> int:
     if files:
         print("written: " + ", ".join(files))
     return 0 if admissible else 1
-
-
-def swing_request(actuated_swing: float, double_support: float, request: GaitRequest):
-    """The cycle with an actuated swing asked (``actuated_swing`` s at each end of the swing,
-    ``double_support`` s of double support, the least effort without margins), or None for 0;
-    ``ValueError`` (one line) for a duration that is none or beside a stride on a circle."""
-    if actuated_swing == 0.0:
-        return None
-    from ..core.gait.actuated_swing import SwingRequest
-    from ..core.gait.lasting import LastingRequest
-
-    swing = SwingRequest(actuated_swing, LastingRequest(double_support, request.effort))
-    if 2 * actuated_swing >= request.period:
-        raise ValueError(f"actuated_swing must be below half the period ({request.period / 2:g} s), "
-                         f"got {actuated_swing:g} s")
-    if math.isfinite(request.turn_radius):
-        raise ValueError("actuated_swing: planned for straight gaits only")
-    return swing
 
 
 def swing_summary(cycle, paper_effort: float) -> str:

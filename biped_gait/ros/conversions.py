@@ -7,13 +7,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 from builtin_interfaces.msg import Duration
 from geometry_msgs.msg import Vector3
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from biped_gait_interfaces.msg import DoubleSupportPhase, GaitPlan
+from biped_gait_interfaces.msg import DoubleSupportPhase, GaitPlan, SwingPhase, SwingPhases
 from biped_gait_interfaces.srv import PlanGait
 
 from ..core.gait.configurations import GaitMode
@@ -27,6 +28,9 @@ from ..core.model.biped import BipedModel
 from ..core.model.urdf import UrdfJoints
 from ..core.walking.orbit import PlannedOrbit
 from ..recording.topics import MODE_CODES
+
+if TYPE_CHECKING:
+    from ..core.gait.actuated_swing import ActuatedSwingCycle
 
 MODE_TO_MSG = {mode: code for code, mode in MODE_CODES.items()}
 POINT_NAMES = tuple(option.name for option in POINT)
@@ -125,13 +129,12 @@ def plan_msg(gait: Gait, header, joints: UrdfJoints) -> GaitPlan:
 PHASE_NAMES = {"X": "x", "Xd": "xd", "Xdd": "xdd", "solve_time_s": "solve_time"}
 
 
-def phase_msg(phase: dict) -> DoubleSupportPhase:
-    """The DoubleSupportPhase message of a plan JSON's ``double_support_phase``
-    (``views.double_support_phase``): the same figures, arrays flattened row by row, JSON's null
-    NaN again (an empty array where there is none, ``next_start_velocity``)."""
-    msg = DoubleSupportPhase()
-    types = DoubleSupportPhase.get_fields_and_field_types()
-    for key, value in phase.items():
+def figures_msg(msg_type: type, figures: dict):
+    """A ``msg_type`` message of a plan JSON's ``figures`` (same names but ``PHASE_NAMES``'):
+    arrays flattened row by row, JSON's null NaN again (an empty array where there is none)."""
+    msg = msg_type()
+    types = msg_type.get_fields_and_field_types()
+    for key, value in figures.items():
         name = PHASE_NAMES.get(key, key)
         if types[name].startswith("sequence"):
             value = [] if value is None else np.asarray(value, dtype=float).ravel().tolist()
@@ -139,6 +142,28 @@ def phase_msg(phase: dict) -> DoubleSupportPhase:
             value = math.nan
         setattr(msg, name, value)
     return msg
+
+
+def phase_msg(phase: dict) -> DoubleSupportPhase:
+    """The DoubleSupportPhase message of a plan JSON's ``double_support_phase``
+    (``views.double_support_phase``): the same figures (``figures_msg``)."""
+    return figures_msg(DoubleSupportPhase, phase)
+
+
+def swing_phases_msg(view: dict) -> SwingPhases:
+    """The SwingPhases message of a cycle whose swing is actuated at its two ends, as the plan JSON
+    has it (``actuated_swing.cycle_view``): its ``swing_phases`` (success, message, each end a
+    SwingPhase) and the cycle's figures; its ``double_support_phase`` is ``phase_msg``'s."""
+    phases = view["swing_phases"]
+    figures = {key: value for key, value in view.items() if key not in ("swing_phases", "double_support_phase")}
+    msg = figures_msg(SwingPhases, {**figures, "success": phases["success"], "message": phases["message"]})
+    msg.start, msg.end = (figures_msg(SwingPhase, phases[which]) for which in ("start", "end"))
+    return msg
+
+
+def _rows(values, *shape) -> np.ndarray:
+    """A flattened array field in its rows of ``shape`` again."""
+    return np.asarray(values, dtype=float).reshape(-1, *shape)
 
 
 def lasting_support_from_msg(plan: GaitPlan) -> LastingSupport | None:
@@ -149,19 +174,34 @@ def lasting_support_from_msg(plan: GaitPlan) -> LastingSupport | None:
     if msg.duration == 0.0:
         return None
     nx, na = len(plan.double_support_coordinates), len(plan.actuated_joints)
-
-    def rows(values, *shape) -> np.ndarray:
-        return np.asarray(values, dtype=float).reshape(-1, *shape)
-
     return LastingSupport(
         duration=msg.duration, success=msg.success, message=msg.message, t=np.asarray(msg.t, dtype=float),
-        x=rows(msg.x, nx), xd=rows(msg.xd, nx), xdd=rows(msg.xdd, nx), torques=rows(msg.torques, na),
-        contact_forces=rows(msg.contact_forces, 2, 3), i_minus=np.asarray(msg.i_minus, dtype=float),
-        i_plus=np.asarray(msg.i_plus, dtype=float), held_impact_impulses=rows(msg.held_impact_impulses, 3),
+        x=_rows(msg.x, nx), xd=_rows(msg.xd, nx), xdd=_rows(msg.xdd, nx), torques=_rows(msg.torques, na),
+        contact_forces=_rows(msg.contact_forces, 2, 3), i_minus=np.asarray(msg.i_minus, dtype=float),
+        i_plus=np.asarray(msg.i_plus, dtype=float), held_impact_impulses=_rows(msg.held_impact_impulses, 3),
         effort_l1=msg.effort_l1, effort_l2=msg.effort_l2, effort_total=msg.effort_total,
         iterations=msg.iterations, solve_time_s=msg.solve_time,
         next_start_velocity=np.asarray(msg.next_start_velocity, dtype=float),
         push_off=np.asarray(msg.push_off, dtype=float) if len(msg.push_off) else None)
+
+
+def swing_cycle_from_msg(plan: GaitPlan) -> "ActuatedSwingCycle | None":
+    """What a walk needs of a GaitPlan's swing actuated at its two ends (``swing_phases_msg``'s
+    inverse, with the double support of ``lasting_support_from_msg``; the ballistic flight's ends
+    the actuated ends' meeting states, in the single-support coordinates ``joint_names``); None for
+    the paper's ballistic swing (actuated_swing 0)."""
+    msg = plan.swing_phases
+    if msg.actuated_swing == 0.0:
+        return None
+    from ..core.gait.actuated_swing import ActuatedSwingCycle, SwingEnd  # CasADi only when asked
+
+    nx, na = len(plan.double_support_coordinates), len(plan.actuated_joints)
+    at = [plan.double_support_coordinates.index(name) for name in plan.joint_names]
+    start, end = (SwingEnd(np.asarray(m.t, dtype=float), _rows(m.x, nx), _rows(m.xd, nx), _rows(m.xdd, nx),
+                           _rows(m.torques, na), _rows(m.contact_forces, 3)) for m in (msg.start, msg.end))
+    flow_start, flow_end = (np.concatenate([e.x[k, at], e.xd[k, at]]) for e, k in ((start, -1), (end, 0)))
+    return ActuatedSwingCycle(msg.actuated_swing, msg.success, msg.message, start, end, lasting_support_from_msg(plan),
+                              flow_start, flow_end, msg.effort_total, msg.effort_l2, msg.iterations, msg.solve_time)
 
 
 def stride_msgs(stride: Stride, header, joints: UrdfJoints) -> tuple[GaitPlan, list[GaitPlan]]:

@@ -1,7 +1,8 @@
 """The gait-planner node (entry point ``biped-gait-planner``).
 
 - service ``~/plan_gait`` (biped_gait_interfaces/srv/PlanGait): plan one gait; with
-  ``double_support`` > 0, its periodic cycle with a double support that lasts (an IPOPT solve of
+  ``double_support`` > 0, its periodic cycle with a double support that lasts, with
+  ``actuated_swing`` > 0 the cycle whose swing is actuated at its two ends (each an IPOPT solve of
   seconds to minutes, on a thread of its own: the node serves the rest meanwhile);
 - action ``~/optimize_arm_swing`` (biped_gait_interfaces/action/OptimizeArmSwing): the arm
   amplitude of least effort, with feedback per amplitude evaluated; cancelable;
@@ -58,7 +59,7 @@ from biped_gait_interfaces.srv import PlanGait
 
 from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_param_names
 from ..core.gait import views
-from ..core.gait.planner import SEED, GaitPlanner, GaitRequest, lasting_request
+from ..core.gait.planner import SEED, GaitPlanner, GaitRequest, lasting_request, swing_request
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.text import clip
 from ..recording import topics
@@ -66,7 +67,7 @@ from ..recording.background import BackgroundRecorder
 from ..recording.writer import McapRecorder, RecordingError
 from ..core.gait.arm_optimum import Canceled, NoAdmissibleGait, expected_solves, optimal_arm_amplitude
 from .conversions import (OPTION_NAMES, POINT_NAMES, gait_fields, phase_msg, plan_msg, request_key, stride_msgs,
-                          urdf_joints)
+                          swing_phases_msg, urdf_joints)
 from .diagnostics import OK, WARN, Counters, Diagnostics, Report
 from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .parameters import Param, declare
@@ -321,9 +322,11 @@ class GaitPlannerNode(Node):
         """Answer from the cache (the first answer's success and message, marked cached), else
         plan: ``success`` only for an admissible gait; otherwise the reasons (a gait that misses
         only the margins says so) and, when the atlas knows, where the nearest admissible gaits are.
-        With ``double_support`` > 0, the gait's cycle with that double support too (``_lasting``)."""
+        With ``double_support`` > 0, the gait's cycle with that double support too (``_lasting``);
+        with ``actuated_swing`` > 0, the cycle whose swing is actuated at its two ends (the one a walk
+        tracks, ``swing_request``'s ``walkable``), with that double support."""
         fields = self._fields(request, (*POINT_NAMES, *OPTION_NAMES))
-        key = request_key({**fields, "double_support": request.double_support})
+        key = request_key({**fields, "double_support": request.double_support, "actuated_swing": request.actuated_swing})
         cached = self._cached(self._cache, key)
         if cached is not None:
             self.stats.count("cache_hits")
@@ -334,6 +337,7 @@ class GaitPlannerNode(Node):
             return
         core_request = GaitRequest(**fields)
         lasting = lasting_request(core_request, request.double_support)
+        swing = swing_request(core_request, request.actuated_swing, request.double_support, walkable=True)
         planner = self._planner(core_request.params, "service")
         joints = urdf_joints(planner.model)
         if math.isfinite(core_request.turn_radius):
@@ -349,13 +353,12 @@ class GaitPlannerNode(Node):
         else:
             reasons = "not admissible: " + "; ".join(gait.reasons)
             response.message = f"{reasons}; {gait.hint}" if gait.hint else reasons
-        if lasting is not None and gait.usable:
-            support, limit = await self._lasting(lambda: planner.lasting_cycle(gait, lasting))
-            plan.double_support_phase = phase_msg(views.double_support_phase(support, limit.effort_total))
-            solve_time += limit.solve_time_s + support.solve_time_s
-            response.success = response.success and support.success
-            said = (f"double support of {support.duration:g} s: E = {support.effort_total:.3f} N m s "
-                    f"(E(0+) = {limit.effort_total:.3f})" if support.success else support.message)
+        if (lasting is not None or swing is not None) and gait.usable:
+            solve = (self._swing_cycle(planner, gait, swing, plan) if swing is not None
+                     else self._lasting_cycle(planner, gait, lasting, plan))
+            solved, said, seconds = await solve
+            solve_time += seconds
+            response.success = response.success and solved
             response.message = f"{response.message}; {said}"
         self.stats.count("solves")
         self.stats.time(solve_time)
@@ -366,6 +369,28 @@ class GaitPlannerNode(Node):
         self._keep(self._cache, key, answer)
         if response.success:
             self._record(lambda: self.plan_publisher.publish(plan), self.plan_publisher.topic)
+
+    async def _lasting_cycle(self, planner: GaitPlanner, gait, lasting, plan: GaitPlan) -> tuple[bool, str, float]:
+        """``gait``'s cycle with the double support that lasts ``lasting`` asks, into ``plan``: whether
+        it was solved, what to say of it, the solves' time (s)."""
+        support, limit = await self._lasting(lambda: planner.lasting_cycle(gait, lasting))
+        plan.double_support_phase = phase_msg(views.double_support_phase(support, limit.effort_total))
+        said = (f"double support of {support.duration:g} s: E = {support.effort_total:.3f} N m s "
+                f"(E(0+) = {limit.effort_total:.3f})" if support.success else support.message)
+        return support.success, said, limit.solve_time_s + support.solve_time_s
+
+    async def _swing_cycle(self, planner: GaitPlanner, gait, swing, plan: GaitPlan) -> tuple[bool, str, float]:
+        """``gait``'s cycle whose swing is actuated at its two ends as ``swing`` asks, into ``plan``
+        (its ``swing_phases`` and ``double_support_phase``), as ``_lasting_cycle``."""
+        from ..core.gait.actuated_swing import cycle_view  # CasADi only when asked
+
+        cycle = await self._lasting(lambda: planner.actuated_swing.cycle(gait, swing))
+        view = cycle_view(cycle)
+        plan.swing_phases, plan.double_support_phase = swing_phases_msg(view), phase_msg(view["double_support_phase"])
+        said = (f"swing actuated for {cycle.actuated_swing:g} s at each end, double support of "
+                f"{cycle.support.duration:g} s: E = {cycle.effort_l1:.3f} N m s, peak torque "
+                f"{cycle.peak_torque.max():.1f} N m" if cycle.success else cycle.message)
+        return cycle.success, said, cycle.solve_time_s
 
     async def _lasting(self, solve: Callable[[], tuple]) -> tuple:
         """``solve()`` (a lasting double support: seconds of IPOPT) on a thread of its own, awaited:

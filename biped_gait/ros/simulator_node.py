@@ -7,7 +7,10 @@ node's parameters of the gait vocabulary (``biped_gait.gait_options``: ``step_le
 ``period``, ``arm_amplitude``, ``mode``, ``params``, ``closure``, ``effort``,
 ``effort_coordinates``, ``friction``, ``rate_bound``, ``min_clearance``, ``friction_margin``:
 the names, units and meanings of the service's fields; checked at start); with
-``optimize_arms`` the planner's ``optimize_arm_swing`` action finds the amplitude first.
+``optimize_arms`` the planner's ``optimize_arm_swing`` action finds the amplitude first. With
+``double_support`` > 0 the plan's double support that lasts is tracked, and with
+``actuated_swing`` > 0 too its swing actuated at its two ends (the hybrid engine only:
+``check_held_phases``, ``held_orbit``; docs/model.md sections 14.1 and 15.1).
 
 Topics (stamps are the walk's simulated time, started at the node's clock: the wall clock, or
 with ``use_sim_time`` the simulated time, from 0): ``/clock`` (rosgraph_msgs/Clock, that time,
@@ -104,12 +107,13 @@ from ..core.walking.events import CouldNotStart, Fell, Finished, StepSamples, To
 from ..core.walking.held_support import lasting_orbit
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.runner import prepare_walking
+from ..core.walking.swing_ends import actuated_orbit
 from ..core.walking.walk import ENGINES, INITIAL_STATES, PULSE_DURATION, Walk, check_initial_state
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
 from ..recording.recorder_process import RecorderProcess
 from ..recording.writer import DEFAULT_CHUNK_SIZE, RecordingError, SampleRows
-from .conversions import MODE_TO_MSG, lasting_support_from_msg, orbit_from_msg
+from .conversions import MODE_TO_MSG, lasting_support_from_msg, orbit_from_msg, swing_cycle_from_msg
 from .diagnostics import ERROR, OK, WARN, Counters, Diagnostics, Report
 from .diagnostics import QOS as DIAGNOSTICS_QOS, TOPIC as DIAGNOSTICS_TOPIC
 from .gait_phase import GaitPhases
@@ -163,6 +167,11 @@ PARAMETERS = (
           "tens of seconds before the walk starts) and tracked by the walk (docs/model.md section 14.1). With "
           "engine 'hybrid' and the duration re-aim (recovery is taken as 'duration'); /cmd_vel is not followed "
           "(a speed change from it does not converge yet)", 0.0, 1.0),
+    Param("actuated_swing", 0.0, "the swing actuated for its first and its last tau s (s), with torques within the "
+          "joints' effort limits, and ballistic between: 0 the paper's ballistic swing with its impulses; > 0 the cycle "
+          "planned by the planner (an IPOPT solve: about a minute before the walk starts) and tracked by the walk "
+          "(docs/model.md section 15.1). With double_support > 0 and engine 'hybrid'; /cmd_vel is not followed",
+          0.0, 1.0),
     Param("pulse_duration", PULSE_DURATION, "with engine 'mujoco': the double support's duration d (s), its "
           "impulses spread into torques over d / 2 before and after the touchdown", 1e-4, 0.1),
     Param("reaim", True, "re-solve each step from the actual state, the open-loop gait being unstable (true/false)"),
@@ -207,6 +216,19 @@ PARAMETERS = (
 )
 
 
+def check_held_phases(double_support: float, actuated_swing: float, engine: str) -> None:
+    """``ValueError`` (one line, the physical reason) for phases with the feet held that the walk
+    cannot track: in MuJoCo (its floor holds the feet sideways, which the plans' chain leaves free),
+    or an actuated swing without a double support that lasts (planned at d = 0, not walked)."""
+    for name, value in (("actuated_swing", actuated_swing), ("double_support", double_support)):
+        if value > 0.0 and engine != "hybrid":
+            raise ValueError(f"{name} {value:g} s needs engine 'hybrid': MuJoCo's floor holds the feet sideways, which "
+                             "the plan's closed chain leaves free (docs/model.md section 14.1)")
+    if actuated_swing > 0.0 and double_support == 0.0:
+        raise ValueError(f"actuated_swing {actuated_swing:g} s needs double_support > 0: the walk lands its actuated "
+                         "swing into a double support that lasts (d = 0 is planned, not walked; docs/model.md 15.1)")
+
+
 class NoPlan(RuntimeError):
     """No plan to walk: the planner did not answer in time, refused, or the node stopped."""
 
@@ -224,9 +246,7 @@ class SimulatorNode(Node):
         self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
         check_initial_state(value["initial_state"], value["engine"])
-        if value["double_support"] > 0.0 and value["engine"] != "hybrid":
-            raise ValueError(f"double_support {value['double_support']:g} s needs engine 'hybrid': MuJoCo's floor holds "
-                             "the feet sideways, which the plan's closed chain leaves free (docs/model.md section 14.1)")
+        check_held_phases(value["double_support"], value["actuated_swing"], value["engine"])
         prepare_walking()  # what the walk loads once, now rather than when it starts
         gait = {name: value[name] for name in GAIT_NAMES}
         try:
@@ -414,7 +434,8 @@ class SimulatorNode(Node):
             self.get_logger().info(f"optimal arm amplitude {math.degrees(alpha):.2f} deg: {result.message}")
         # the walk needs the plan's boundary states, not its sampled trajectory
         request = PlanGait.Request(arm_amplitude=alpha, mode=mode, omit_trajectory=True,
-                                   double_support=value["double_support"], **options)
+                                   double_support=value["double_support"], actuated_swing=value["actuated_swing"],
+                                   **options)
         # A double support that lasts is an IPOPT solve of tens of seconds (docs/ros.md): waited for once.
         response = (self._call_plan(request, attempts=1, patience=LASTING_PATIENCE) if value["double_support"] > 0.0
                     else self._call_plan(request))
@@ -538,14 +559,11 @@ class SimulatorNode(Node):
         except NoPlan as exc:
             self._not_started(str(exc))
             return
-        orbit = tuple(replace(orbit_from_msg(plan), params=params) for plan in plans)
-        support = lasting_support_from_msg(plans[0])
-        if support is not None:  # the orbit walked with its double support that lasts, tracked
-            try:
-                orbit = (lasting_orbit(orbit[0], support, HybridStep(BipedModel.from_params(load_params(params or None)))),)
-            except ValueError as exc:  # a plan its walk cannot track (held_support): said, not walked
-                self._not_started(str(exc))
-                return
+        try:
+            orbit = held_orbit(plans, params)
+        except ValueError as exc:  # a plan its walk cannot track (held_support, swing_ends): said, not walked
+            self._not_started(str(exc))
+            return
         start_ns = self.get_clock().now().nanoseconds
         pacer = Pacer(self.rtf)
         plan = plans[0]
@@ -718,6 +736,21 @@ class SimulatorNode(Node):
                 raise
             if not recorder.failure:
                 rclpy.logging.get_logger("biped_gait.recorder").info(f"{self.get_name()}: recording finalized: {recorder.bag_dir}")
+
+
+def held_orbit(plans: list[GaitPlan], params: str) -> tuple[PlannedOrbit, ...]:
+    """The orbit to walk of ``plans`` (its steps) with the parameter set ``params``: with its swing
+    actuated at its two ends (``swing_ends.actuated_orbit``) or its double support that lasts
+    (``held_support.lasting_orbit``) tracked, when the plan has them; ``ValueError`` for a plan
+    whose walk cannot track them."""
+    orbit = tuple(replace(orbit_from_msg(plan), params=params) for plan in plans)
+    cycle, support = swing_cycle_from_msg(plans[0]), lasting_support_from_msg(plans[0])
+    if cycle is None and support is None:
+        return orbit
+    hybrid = HybridStep(BipedModel.from_params(load_params(params or None)))
+    if cycle is not None:
+        return (actuated_orbit(orbit[0], cycle, hybrid),)
+    return (lasting_orbit(orbit[0], support, hybrid),)
 
 
 def main(args: list[str] | None = None) -> int:

@@ -65,11 +65,12 @@ class SwingRequest:
     bounded_between: bool = False
 
     @classmethod
-    def walkable(cls, actuated_swing: float, duration: float) -> "SwingRequest":
+    def walkable(cls, actuated_swing: float, duration: float, effort: str = "l1") -> "SwingRequest":
         """The cycle a walk can track (docs/model.md 15.1): the double support's margins
         (``LastingRequest``'s least normal force and friction margin; no push-off, there is no I^+),
-        20 intervals over each end, its torques bounded between the points."""
-        support = LastingRequest(duration, least_normal_force=WALK_LEAST_NORMAL_FORCE, friction_margin=WALK_FRICTION_MARGIN)
+        20 intervals over each end, its torques bounded between the points; ``effort`` minimized."""
+        support = LastingRequest(duration, effort, least_normal_force=WALK_LEAST_NORMAL_FORCE,
+                                 friction_margin=WALK_FRICTION_MARGIN)
         return cls(actuated_swing, support, swing_intervals=2 * SWING_INTERVALS, bounded_between=True)
 
     def __post_init__(self) -> None:

@@ -44,6 +44,7 @@ from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
+    from .actuated_swing import ActuatedSwingPlanner, SwingRequest
     from .lasting import LastingPlanner, LastingRequest
     from .lasting_support import LastingSupport
     from .turning_atlas import TurningAtlas
@@ -200,6 +201,28 @@ def lasting_request(request: GaitRequest, duration: float) -> "LastingRequest | 
     return lasting
 
 
+def swing_request(request: GaitRequest, actuated_swing: float, duration: float,
+                  walkable: bool = False) -> "SwingRequest | None":
+    """The cycle with the swing actuated for ``actuated_swing`` s at each end asked beside
+    ``request``, with a double support of ``duration`` s: the least effort without margins, or with
+    ``walkable`` the cycle a walk tracks (``SwingRequest.walkable``: the plan served is the one the
+    simulator walks); None for 0 (the paper's ballistic swing). ``ValueError`` (one line) for a
+    duration that is none, not below half the period, or beside a stride on a circle."""
+    if actuated_swing == 0.0:
+        return None
+    from .actuated_swing import SwingRequest  # CasADi's import only when an actuated swing is asked
+    from .lasting import LastingRequest
+
+    swing = (SwingRequest.walkable(actuated_swing, duration, request.effort) if walkable
+             else SwingRequest(actuated_swing, LastingRequest(duration, request.effort)))
+    if 2 * actuated_swing >= request.period:
+        raise ValueError(f"actuated_swing must be below half the period ({request.period / 2:g} s), "
+                         f"got {actuated_swing:g} s")
+    if math.isfinite(request.turn_radius):
+        raise ValueError("actuated_swing: planned for straight gaits only")
+    return swing
+
+
 class GaitPlanner:
     """Plans gaits for one parameter set; keeps its Pinocchio models, hybrid step and flows, and
     its atlases (loaded when it is made, so that its first plan costs what the next ones do).
@@ -252,6 +275,14 @@ class GaitPlanner:
         from .lasting import LastingPlanner
 
         return LastingPlanner(self.model, self.hybrid.exchange, self.flow, self.params.friction)
+
+    @cached_property
+    def actuated_swing(self) -> "ActuatedSwingPlanner":
+        """The cycles whose swing is actuated at its two ends (``core/gait/actuated_swing.py``), on
+        ``lasting``'s model, exchange and flow; their programs built when first solved."""
+        from .actuated_swing import ActuatedSwingPlanner
+
+        return ActuatedSwingPlanner(self.lasting)
 
     def lasting_cycle(self, gait: Gait, request: "LastingRequest") -> tuple["LastingSupport", "LastingSupport"]:
         """``gait``'s periodic cycle with a double support of ``request.duration`` s and its

@@ -7,7 +7,8 @@ torque pulses of ``pulse_duration``; ``initial_state``: walking on the gait's or
 at rest held by the balance controller, ``phases.standing``), runs the walk with the runner
 (``runner.Walker``), calls ``before_step`` before each step (pushes, another gait to aim at; while
 standing, which has no steps, before each of its phases), and gives each phase's samples with the
-robot in world terms (``world``).
+robot in world terms (``world``). An orbit whose swing is actuated at its two ends
+(``PlannedOrbit.swing_ends``, docs/model.md section 15.1) is walked from its actuated start.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from ..model.params import load_params
 from .balance import balance, standing_pose
 from .events import CouldNotStart, Fell, Finished, Sample, StepSamples, Touchdown
 from .orbit import Cycle, PlannedOrbit, as_cycle
+from .phases.actuated import ActuatedStart
 from .phases.pulses import Coast, Pulses
 from .phases.standing import Standing
 from .push import AppliedPush
@@ -122,6 +124,8 @@ class Walk:
             except ValueError as exc:  # BalanceError: the posture cannot be held
                 self.problem = str(exc)
                 return
+        if self.orbit.swing_ends is not None and first is None:  # the swing actuated at its ends: from its start
+            first = ActuatedStart(self.orbit.swing_ends.start, 0.0)
         self.walker = Walker(hybrid, cycle, rate, reaim, settings, momentum_rate, stepper, first)
 
     def __iter__(self) -> Iterator[Sample | AppliedPush | Touchdown | Fell | Finished | CouldNotStart]:
