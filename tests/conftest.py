@@ -102,7 +102,7 @@ def pytest_runtest_protocol(item, nextitem):
 # and the short modules, after them, even out the workers' ends; its own order, by the number of
 # tests, left long modules of few tests for last, one worker walking on alone. The order changes no
 # test's outcome; a module missing here only starts later.
-LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "test_planner_node",
+LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "test_actuated_ros", "test_planner_node",
                  "test_simulator_turning", "test_doc_examples", "test_lasting", "test_simulator_node", "test_lasting_hips",
                  "test_actuated_swing", "test_faults_inputs", "test_simulator_lasting", "test_standing",
                  "test_simulator_standing", "test_simulator_walking", "test_walking_page", "test_simulator_start_stop",

@@ -51,3 +51,33 @@ def read_bag(bag_dir: Path) -> dict[str, list]:
             out.setdefault(conn.topic, []).append((stamp, reader.deserialize(raw, conn.msgtype)))
     return out
 
+
+
+def walk_recorded(where: Path, planner: str, steps: int, *params: str) -> dict[str, list]:
+    """The recording (``read_bag``) of a simulator's walk of ``steps`` steps asking the planner node
+    named ``planner``, with the parameters ``params``, as fast as it computes: its exit status 0,
+    ``steps`` touchdowns and no fall."""
+    from biped_gait_interfaces.msg import GaitEvent
+
+    proc = start_simulator(where, planner, *params, f"steps:={steps}", "real_time_factor:=0.0", "exit_when_done:=true")
+    assert proc.wait(timeout=600) == 0, (where / "biped-gait-simulator.log").read_text()[-2000:]
+    [bag] = list((where / "bags").iterdir())
+    recorded = read_bag(bag)
+    events = [m for _, m in recorded["/gait_events"]]
+    assert not [e for e in events if e.kind == GaitEvent.FALL]
+    assert len([e for e in events if e.kind == GaitEvent.TOUCHDOWN]) == steps
+    return recorded
+
+
+def stamp(msg) -> float:
+    """A message's header stamp (s)."""
+    return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+
+
+def double_supports(recorded: dict[str, list]) -> list[tuple[float, float]]:
+    """The spans (s, s) of a walk's double supports on /gait_phase: from each DOUBLE_STANCE to the
+    phase after it."""
+    from biped_gait_interfaces.msg import GaitPhase
+
+    phases = [m for _, m in recorded["/gait_phase"]]
+    return [(stamp(ds), stamp(after)) for ds, after in zip(phases, phases[1:]) if ds.phase == GaitPhase.DOUBLE_STANCE]

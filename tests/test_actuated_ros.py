@@ -19,13 +19,12 @@ import pytest
 
 pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
 
-from biped_gait_interfaces.msg import GaitEvent, GaitPhase  # noqa: E402
 from biped_gait_interfaces.srv import PlanGait  # noqa: E402
 
 from biped_gait.ros.client import ClientSide, plan_request  # noqa: E402
 from biped_gait.ros.conversions import swing_cycle_from_msg  # noqa: E402
 
-from .ros_helpers import planner_process, read_bag, start_simulator  # noqa: E402
+from .ros_helpers import double_supports, planner_process, stamp, start_simulator, walk_recorded  # noqa: E402
 
 pytestmark = pytest.mark.ros
 
@@ -123,18 +122,9 @@ def test_the_simulator_walks_the_actuated_swing(ros, answered, tmp_path):
     least-effort torques there are at the limit or near zero: measured 200 N m over the start's first
     45 ms, then below 3), none in the ballistic flight between."""
     assert answered[0].success, answered[0].message
-    proc = start_simulator(tmp_path, PLANNER, f"actuated_swing:={TAU}", f"double_support:={DURATION}",
-                           f"steps:={STEPS}", "real_time_factor:=0.0", "exit_when_done:=true")
-    assert proc.wait(timeout=600) == 0, (tmp_path / "biped-gait-simulator.log").read_text()[-2000:]
-    [bag] = list((tmp_path / "bags").iterdir())
-    recorded = read_bag(bag)
-    events = [m for _, m in recorded["/gait_events"]]
-    assert not [e for e in events if e.kind == GaitEvent.FALL]
-    assert len([e for e in events if e.kind == GaitEvent.TOUCHDOWN]) == STEPS
-    stamp = lambda m: m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec  # noqa: E731
-    phases = [m for _, m in recorded["/gait_phase"]]
-    lasted = [stamp(after) - stamp(ds) for ds, after in zip(phases, phases[1:]) if ds.phase == GaitPhase.DOUBLE_STANCE]
-    assert len(lasted) >= STEPS - 1 and all(abs(d - DURATION) <= 2 / 500 + 1e-9 for d in lasted), lasted
+    recorded = walk_recorded(tmp_path, PLANNER, STEPS, f"actuated_swing:={TAU}", f"double_support:={DURATION}")
+    spans = double_supports(recorded)
+    assert len(spans) >= STEPS - 1 and all(abs(b - a - DURATION) <= 2 / 500 + 1e-9 for a, b in spans), spans
     efforts = [(stamp(m), max(abs(e) for e in m.effort)) for _, m in recorded["/joint_states"]]
     # Each step from its lift-off: the actuated start (0 to tau), the flight, the actuated end (T - tau to T), then
     # the double support (T to T + d); 5 ms off each boundary.

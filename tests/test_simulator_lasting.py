@@ -10,9 +10,7 @@ import pytest
 
 pytest.importorskip("biped_gait_interfaces", reason="the ROS interfaces are not built (tools/setup.sh)")
 
-from biped_gait_interfaces.msg import GaitEvent, GaitPhase
-
-from .ros_helpers import planner_process, read_bag, start_simulator
+from .ros_helpers import double_supports, planner_process, stamp, start_simulator, walk_recorded
 
 pytestmark = pytest.mark.ros
 
@@ -25,21 +23,11 @@ def test_the_simulator_walks_a_double_support_that_lasts(tmp_path):
     """20 steps, no fall, exit status 0; every step's double support on /gait_phase from its first
     sample to the next single support, d to within a sample (publish_rate 500 Hz)."""
     with planner_process(PLANNER, tmp_path):
-        proc = start_simulator(tmp_path, PLANNER, f"double_support:={DURATION}", f"steps:={STEPS}",
-                               "real_time_factor:=0.0", "exit_when_done:=true")
-        assert proc.wait(timeout=600) == 0, (tmp_path / "biped-gait-simulator.log").read_text()[-2000:]
-    [bag] = list((tmp_path / "bags").iterdir())
-    recorded = read_bag(bag)
-    events = [m for _, m in recorded["/gait_events"]]
-    assert not [e for e in events if e.kind == GaitEvent.FALL]
-    assert len([e for e in events if e.kind == GaitEvent.TOUCHDOWN]) == STEPS
-    phases = [m for _, m in recorded["/gait_phase"]]
-    stamp = lambda m: m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec  # noqa: E731
-    lasted = [stamp(after) - stamp(ds) for ds, after in zip(phases, phases[1:]) if ds.phase == GaitPhase.DOUBLE_STANCE]
-    assert len(lasted) >= STEPS - 1
-    assert all(abs(d - DURATION) <= 2 / 500 + 1e-9 for d in lasted), lasted
+        recorded = walk_recorded(tmp_path, PLANNER, STEPS, f"double_support:={DURATION}")
+    spans = double_supports(recorded)
+    assert len(spans) >= STEPS - 1
+    assert all(abs(b - a - DURATION) <= 2 / 500 + 1e-9 for a, b in spans), spans
     # The joints' efforts: within the joint table's 200 N m, working in the double supports only.
-    spans = [(stamp(ds), stamp(after)) for ds, after in zip(phases, phases[1:]) if ds.phase == GaitPhase.DOUBLE_STANCE]
     inside, outside = [], []
     for _, joints in recorded["/joint_states"]:
         t = stamp(joints)
