@@ -34,6 +34,7 @@ from __future__ import annotations
 import copy
 import math
 import threading
+import time
 from collections import OrderedDict
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -381,19 +382,23 @@ class GaitPlannerNode(Node):
 
     async def _swing_cycle(self, planner: GaitPlanner, gait, swing, plan: GaitPlan) -> tuple[bool, str, float]:
         """``gait``'s cycle whose swing is actuated at its two ends as ``swing`` asks, into ``plan``
-        (its ``swing_phases`` and ``double_support_phase``), as ``_lasting_cycle``."""
+        (its ``swing_phases`` and ``double_support_phase``), as ``_lasting_cycle`` (the time: the
+        impulsive cycle it starts from, the programs' building on a first call, and IPOPT's)."""
         from ..core.gait.actuated_swing import cycle_view  # CasADi only when asked
 
+        started = time.perf_counter()
         cycle = await self._lasting(lambda: planner.actuated_swing.cycle(gait, swing))
+        seconds = time.perf_counter() - started
         view = cycle_view(cycle)
         plan.swing_phases, plan.double_support_phase = swing_phases_msg(view), phase_msg(view["double_support_phase"])
         said = (f"swing actuated for {cycle.actuated_swing:g} s at each end, double support of "
                 f"{cycle.support.duration:g} s: E = {cycle.effort_l1:.3f} N m s, peak torque "
                 f"{cycle.peak_torque.max():.1f} N m" if cycle.success else cycle.message)
-        return cycle.success, said, cycle.solve_time_s
+        return cycle.success, said, seconds
 
-    async def _lasting(self, solve: Callable[[], tuple]) -> tuple:
-        """``solve()`` (a lasting double support: seconds of IPOPT) on a thread of its own, awaited:
+    async def _lasting(self, solve: Callable[[], object]) -> object:
+        """``solve()`` (a lasting double support's or an actuated swing's cycle: seconds to minutes of
+        IPOPT) on a thread of its own, awaited:
         the spinning thread serves the rest meanwhile (the action, /diagnostics, parameters, a
         stop), the service's callback group held, so that its planner stays one thread's and the
         next requests wait in the queue."""
