@@ -17,7 +17,7 @@ import math
 import numpy as np
 import pytest
 
-from biped_gait.core.gait.actuated_swing import ActuatedSwingPlanner, SwingRequest
+from biped_gait.core.gait.actuated_swing import SwingRequest
 from biped_gait.core.gait.lasting import WALK_LEAST_NORMAL_FORCE
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.walking.events import DOUBLE_SUPPORT
@@ -38,7 +38,7 @@ LIMIT = 200.0  # N m, the joint table's effort
 def planned():
     planner = GaitPlanner(modes=("normal",))
     gait = planner.plan(GaitRequest(0.45, 0.45, math.radians(23.5)))
-    cycle = ActuatedSwingPlanner(planner.lasting).cycle(gait, SwingRequest.walkable(TAU, DURATION))
+    cycle = planner.swing_cycle(gait, SwingRequest.walkable(TAU, DURATION))  # kept for the simulator's test
     assert cycle.success, cycle.message
     return planner, cycle, actuated_orbit(PlannedOrbit.of(gait), cycle, planner.hybrid)
 

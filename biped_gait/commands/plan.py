@@ -37,9 +37,9 @@ def run(args: argparse.Namespace) -> int:
         result, drawn = views.to_dict(gait), gait
     admissible = gait.admissible
     if swing is not None and gait.usable:
-        from ..core.gait.actuated_swing import ActuatedSwingPlanner, cycle_view  # CasADi only when asked
+        from ..core.gait.actuated_swing import cycle_view  # CasADi only when asked
 
-        cycle = ActuatedSwingPlanner(planner.lasting).cycle(gait, swing)
+        cycle = planner.swing_cycle(gait, swing)
         print(swing_summary(cycle, gait.W))
         result.update(cycle_view(cycle))
         admissible = admissible and cycle.success
