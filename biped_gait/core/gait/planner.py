@@ -259,22 +259,19 @@ class GaitPlanner:
         """``gait``'s periodic cycle with a double support of ``request.duration`` s and its
         impulsive limit d -> 0+ (the cycle's seed; its ``effort_total`` is E(0+)), what the ``plan``
         verb and the planner node answer; ``ValueError`` for a parameter set the lasting planner is
-        not written for (lateral hip joints). Kept on disk and answered from there when asked again
-        (``solve_cache``)."""
-        def solve() -> tuple["LastingSupport", "LastingSupport"]:
-            limit = self.lasting.limit(gait, request.effort)
-            return self.lasting.periodic(gait, request, limit=limit), limit
-
-        return cached("lasting_cycle", (self.params, self.settings, self.lasting.boundary(gait), request), solve)
+        not written for (lateral hip joints). The cycle is kept on disk (``LastingPlanner.periodic``)."""
+        limit = self.lasting.limit(gait, request.effort)
+        return self.lasting.periodic(gait, request, limit=limit), limit
 
     def swing_cycle(self, gait: Gait, request: "SwingRequest") -> "ActuatedSwingCycle":
         """``gait``'s cycle with the swing actuated at its two ends (``core/gait/actuated_swing.py``),
         started from the impulsive cycle of the same d, what the ``plan`` verb and the simulator
-        walk; kept on disk as ``lasting_cycle``'s."""
+        walk; kept on disk (``solve_cache``), as the impulsive cycle is."""
         from .actuated_swing import ActuatedSwingPlanner
 
-        return cached("swing_cycle", (self.params, self.settings, self.lasting.boundary(gait), request),
-                      lambda: ActuatedSwingPlanner(self.lasting).cycle(gait, request))
+        lasting = self.lasting
+        return cached("swing_cycle", (lasting.program_key, lasting.boundary(gait), request),
+                      lambda: ActuatedSwingPlanner(lasting).cycle(gait, request))
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
         """The current atlas of these parameters and ``mode`` (loaded when the planner is made,
