@@ -8,6 +8,7 @@ import fcntl
 import math
 import os
 import random
+import shutil
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -29,6 +30,9 @@ if WORKER and "BIPED_GAIT_SESSION_DOMAIN" not in os.environ:
 # The lock the workers share (the controller names it): a test marked ``paced`` holds it alone,
 # every other test shares it.
 os.environ.setdefault("BIPED_GAIT_TEST_LOCK", os.path.join(tempfile.gettempdir(), f"biped-gait-tests-{os.getpid()}"))
+# Solves kept on disk (biped_gait/core/gait/solve_cache.py) for this session alone: its workers and
+# the nodes they start share them; none from an earlier run or from the user's own cache.
+os.environ["BIPED_GAIT_CACHE"] = os.environ["BIPED_GAIT_TEST_LOCK"] + ".solves"
 
 import numpy as np
 import pytest
@@ -121,3 +125,4 @@ def pytest_unconfigure(config):
     if WORKER is None:
         for suffix in (".turnstile", ".lock"):
             Path(os.environ["BIPED_GAIT_TEST_LOCK"] + suffix).unlink(missing_ok=True)
+        shutil.rmtree(os.environ["BIPED_GAIT_CACHE"], ignore_errors=True)

@@ -6,8 +6,9 @@ within the joint table's 200 N m; MuJoCo, and an actuated swing without a double
 lasts, refused at start with their reasons.
 
 One IPOPT solve for the module: the walkable cycle at (tau, d) = (0.1, 0.1) s at the default gait
-(about a minute on the project's 2-core machine), planned once by a planner of the module's own;
-the simulator's request, the same, is answered from that planner's cache."""
+(about a minute on the project's 2-core machine; none when the session's disk cache has it from
+tests/test_actuated_walk.py, core/gait/solve_cache.py), planned once by a planner of the module's
+own; the simulator's request, the same, is answered from that planner's cache."""
 
 from __future__ import annotations
 

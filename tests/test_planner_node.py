@@ -41,7 +41,9 @@ def node_dir(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def planner_process(node_dir):
-    proc = start_node("biped-gait-planner", "-p", f"record_dir:={node_dir / 'bags'}", cwd=node_dir)
+    with pytest.MonkeyPatch.context() as patch:  # its lasting double support solved, not taken from disk
+        patch.setenv("BIPED_GAIT_CACHE", "off")  # (test_a_lasting_double_support_is_planned_off_the_spinning_thread)
+        proc = start_node("biped-gait-planner", "-p", f"record_dir:={node_dir / 'bags'}", cwd=node_dir)
     yield proc
     assert stop_node(proc) == 0, (node_dir / "biped-gait-planner.log").read_text()
 

@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if swing is not None and gait.usable:
         from ..core.gait.actuated_swing import cycle_view  # CasADi only when asked
 
-        cycle = planner.actuated_swing.cycle(gait, swing)
+        cycle = planner.swing_cycle(gait, swing)
         print(swing_summary(cycle, gait.W))
         result.update(cycle_view(cycle))
         admissible = admissible and cycle.success

@@ -383,11 +383,12 @@ class GaitPlannerNode(Node):
     async def _swing_cycle(self, planner: GaitPlanner, gait, swing, plan: GaitPlan) -> tuple[bool, str, float]:
         """``gait``'s cycle whose swing is actuated at its two ends as ``swing`` asks, into ``plan``
         (its ``swing_phases`` and ``double_support_phase``), as ``_lasting_cycle`` (the time: the
-        impulsive cycle it starts from, the programs' building on a first call, and IPOPT's)."""
+        impulsive cycle it starts from, the programs' building and IPOPT's, or the disk cache's,
+        ``GaitPlanner.swing_cycle``)."""
         from ..core.gait.actuated_swing import cycle_view  # CasADi only when asked
 
         started = time.perf_counter()
-        cycle = await self._lasting(lambda: planner.actuated_swing.cycle(gait, swing))
+        cycle = await self._lasting(lambda: planner.swing_cycle(gait, swing))
         seconds = time.perf_counter() - started
         view = cycle_view(cycle)
         plan.swing_phases, plan.double_support_phase = swing_phases_msg(view), phase_msg(view["double_support_phase"])

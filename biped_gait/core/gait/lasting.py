@@ -72,6 +72,7 @@ from ..model.exchange import MIRROR
 from ..model.mjcf import TORSIONAL_FRICTION
 from .flow_function import CoupledConstraints, FlowFunction
 from .lasting_support import IMPULSE_TIME, LastingSupport
+from .solve_cache import cached
 
 # Hermite-Simpson intervals over d (2 n + 1 collocation points, nodes and midpoints), by kind. The
 # stop and the start (a second or so) on 10: on 20 IPOPT did not finish either at d = 1 s (1,000
@@ -732,20 +733,30 @@ class LastingPlanner:
         """The limit d -> 0+: I^-, the held impact pressing, I^+ (its effort is E(0+))."""
         return self.program("limit", effort).solve(self.boundary(gait), LastingRequest(0.0, effort))
 
+    @property
+    def program_key(self) -> tuple:
+        """What decides this planner's programs and their solutions besides a gait's ends and a
+        request: the model's parameters, the flow's steps and kind, the friction (``solve_cache``)."""
+        return self.bm.params, self.flow.steps, self.flow.native is not None, self.friction
+
     def periodic(self, gait, request: LastingRequest, start: dict | None = None,
                  limit: LastingSupport | None = None) -> LastingSupport:
         """The periodic cycle of ``gait``'s single support (from the lift-off posture the phase
         ends in) and a double support of ``request.duration`` s; ``start`` a nearby solution, else
-        started from the impulsive limit (``limit``, solved here if not given)."""
+        started from the impulsive limit (``limit``: ``gait``'s own, solved here if not given), that
+        start's solution kept on disk and answered from there when asked again (``solve_cache``)."""
         if request.duration == 0.0:
             return limit or self.limit(gait, request.effort)
         program = self.program("periodic", request.effort)
         boundary = self.boundary(gait)
-        if start is None:
-            limit = limit or self.limit(gait, request.effort)
-            seed = self.program("limit", request.effort).values(limit.solution)
+        if start is not None:
+            return program.solve(boundary, request, start)
+
+        def solve() -> LastingSupport:
+            seed = self.program("limit", request.effort).values((limit or self.limit(gait, request.effort)).solution)
             return program.solve(boundary, request, None, seed)
-        return program.solve(boundary, request, start)
+
+        return cached("lasting_cycle", (self.program_key, boundary, request), solve)
 
     def stop(self, gait, request: LastingRequest, rest: np.ndarray) -> LastingSupport:
         """From ``gait``'s touchdown to rest in the standing posture ``rest`` (rad, on the same two

@@ -40,12 +40,13 @@ from .margins import Margins, with_margins
 from ..dynamics.settings import DEFAULTS, Settings
 from .monodromy import SpeculativeFlow
 from . import richardson
+from .solve_cache import cached
 from .accuracy import END_POINT_BOUND
 from .stability import Multipliers, PoincareMap, multipliers_of, open_loop
 
 if TYPE_CHECKING:
-    from .actuated_swing import ActuatedSwingPlanner, SwingRequest
     from .lasting import LastingPlanner, LastingRequest
+    from .actuated_swing import ActuatedSwingCycle, SwingRequest
     from .lasting_support import LastingSupport
     from .turning_atlas import TurningAtlas
 
@@ -276,21 +277,23 @@ class GaitPlanner:
 
         return LastingPlanner(self.model, self.hybrid.exchange, self.flow, self.params.friction)
 
-    @cached_property
-    def actuated_swing(self) -> "ActuatedSwingPlanner":
-        """The cycles whose swing is actuated at its two ends (``core/gait/actuated_swing.py``), on
-        ``lasting``'s model, exchange and flow; their programs built when first solved."""
-        from .actuated_swing import ActuatedSwingPlanner
-
-        return ActuatedSwingPlanner(self.lasting)
-
     def lasting_cycle(self, gait: Gait, request: "LastingRequest") -> tuple["LastingSupport", "LastingSupport"]:
         """``gait``'s periodic cycle with a double support of ``request.duration`` s and its
         impulsive limit d -> 0+ (the cycle's seed; its ``effort_total`` is E(0+)), what the ``plan``
         verb and the planner node answer; ``ValueError`` for a parameter set the lasting planner is
-        not written for (lateral hip joints)."""
+        not written for (lateral hip joints). The cycle is kept on disk (``LastingPlanner.periodic``)."""
         limit = self.lasting.limit(gait, request.effort)
         return self.lasting.periodic(gait, request, limit=limit), limit
+
+    def swing_cycle(self, gait: Gait, request: "SwingRequest") -> "ActuatedSwingCycle":
+        """``gait``'s cycle with the swing actuated at its two ends (``core/gait/actuated_swing.py``),
+        started from the impulsive cycle of the same d, what the ``plan`` verb and the simulator
+        walk; kept on disk (``solve_cache``), as the impulsive cycle is."""
+        from .actuated_swing import ActuatedSwingPlanner
+
+        lasting = self.lasting
+        return cached("swing_cycle", (lasting.program_key, lasting.boundary(gait), request),
+                      lambda: ActuatedSwingPlanner(lasting).cycle(gait, request))
 
     def atlas(self, mode: GaitMode) -> Atlas | None:
         """The current atlas of these parameters and ``mode`` (loaded when the planner is made,

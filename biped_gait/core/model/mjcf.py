@@ -3,11 +3,14 @@ Pinocchio models (docs/model.md section 9), in two kinds:
 
 - ``stance``: the single-support tree of ``biped.BipedModel.single``, rooted at the stance-foot tip
   (the world origin): its joints are the model's coordinates q, in q order (MuJoCo's qpos and
-  qvel are q and qd), the ankle's roll and pitch passive. No floor, no contact: the ballistic
-  single support (``biped-gait check-mujoco`` integrates it and compares it with the plan).
+  qvel are q and qd), the ankle's roll and pitch passive, a motor on every other (the table's
+  effort bound as its control range, enforced). No floor, no contact: the ballistic single
+  support (``biped-gait check-mujoco`` integrates it and compares it with the plan) and the
+  actuated ends of the swing (tests/test_actuated_walk.py).
 - ``extended``: the same tree with the stance tip's translation (three slides) at its root, and with
   hip roll and yaw joints the old stance foot's spin after the ankle's pitch: the double support's
-  coordinates X of ``BipedModel.double_support`` (its D_e, and J1, J2 at the tips' sites).
+  coordinates X of ``BipedModel.double_support`` (its D_e, and J1, J2 at the tips' sites), with
+  the same motors.
 - ``floating``: the robot as it stands in the world: the pelvis with a free joint, the URDF's
   joints (``JointTable.physical_joints``, URDF names and signs), a motor on each (the table's
   effort bound as its control range), the floor, a point foot at each shin's tip (a small sphere,
@@ -147,9 +150,20 @@ def _stance(p: BipedParams, extended: bool) -> str:
         "            </body>", "          </body>", "        </body>", "      </body>",
         f'      <site name="{STANCE_TIP}" pos="0 0 0"/>',
         "    </body>",
-        "  </worldbody>", "</mujoco>",
+        "  </worldbody>",
+        *_motors([(c.name, c.spec) for c in table.coordinates() if c.actuated]),
+        "</mujoco>",
     ]
     return "\n".join(out) + "\n"
+
+
+def _motors(joints: list[tuple[str, JointSpec]]) -> list[str]:
+    """A motor on each joint (name, spec), its control range the spec's effort limit, enforced."""
+    out = ["  <actuator>"]
+    for name, spec in joints:
+        effort = spec.limits.effort
+        out.append(f'    <motor name="{name}" joint="{name}" ctrlrange="{_v(-effort, effort)}" ctrllimited="true"/>')
+    return out + ["  </actuator>"]
 
 
 def _floating(p: BipedParams) -> str:
@@ -193,10 +207,7 @@ def _floating(p: BipedParams) -> str:
             f'          <site name="{side}_foot" pos="0 0 {-s.length:.12g}"/>',
             "        </body>", "      </body>",
         ]
-    out += ["    </body>", "  </worldbody>", "  <actuator>"]
-    for spec, side in table.physical_joints():
-        name = spec.named(side) if side else spec.name
-        effort = spec.limits.effort
-        out.append(f'    <motor name="{name}" joint="{name}" ctrlrange="{_v(-effort, effort)}" ctrllimited="true"/>')
-    out += ["  </actuator>", "</mujoco>"]
+    out += ["    </body>", "  </worldbody>",
+            *_motors([(spec.named(side) if side else spec.name, spec) for spec, side in table.physical_joints()]),
+            "</mujoco>"]
     return "\n".join(out) + "\n"
