@@ -27,6 +27,7 @@ LIBRARIES = {
     "mcap_ros2": ("python3-mcap-ros2-support-pip", "mcap-ros2-support"),
     "distributed": ("python3-distributed-pip", "distributed"), "foxglove": ("python3-foxglove-sdk-pip", "foxglove-sdk"),
     "mujoco": ("python3-mujoco-pip", "mujoco"), "casadi": ("python3-casadi-pip", "casadi"),
+    "joblib": ("python3-joblib", "joblib"),
 }
 
 
