@@ -1,9 +1,12 @@
 """Solves kept on disk (core/gait/solve_cache.py): the same solve for the same key answered from
-the directory, any other key (the request, the ends, the code) solved, nothing kept when off."""
+the directory, any other key (the request, the ends, the code) solved, a key being solved waited for, nothing
+kept when off."""
 
 from __future__ import annotations
 
 import math
+import threading
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -49,6 +52,30 @@ def test_the_same_key_is_answered_from_disk_and_any_other_is_solved(planned, tmp
     monkeypatch.setattr(solve_cache, "core_digest", lambda: "other code")
     cached("limit", (planner.params, boundary, LastingRequest(0.0)), counted(planner, gait, "l1", calls))
     assert calls == ["l1", "l2", "l1", "l1"]
+
+
+def test_a_key_being_solved_is_waited_for_not_solved_again(planned, tmp_path, monkeypatch):
+    """A second asker of a key whose solve is under way (another thread here; another process
+    takes the same lock) waits for it and gets its answer; its own solve is never called."""
+    planner, gait = planned
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "solves"))
+    key = (planner.params, planner.lasting.boundary(gait), LastingRequest(0.0))
+    solving, answers = threading.Event(), {}
+
+    def first():
+        solving.set()
+        time.sleep(0.5)  # the second asker is waiting by now
+        return planner.lasting.limit(gait)
+
+    def never():
+        raise AssertionError("a key being solved was solved again")
+
+    ahead = threading.Thread(target=lambda: answers.setdefault("first", cached("limit", key, first)))
+    ahead.start()
+    assert solving.wait(30.0)
+    second = cached("limit", key, never)
+    ahead.join(60.0)
+    assert second.effort_total == answers["first"].effort_total
 
 
 def test_off_solves_every_time(planned, monkeypatch):

@@ -7,10 +7,12 @@ program sees them (the touchdown posture, the velocities before and after, the p
 exact bytes, so a gait planned otherwise on another machine is another key), the planner's
 settings and the request. The directory is ``$BIPED_GAIT_CACHE`` if set, else
 ``$XDG_CACHE_HOME/biped_gait`` (``~/.cache`` by default); ``BIPED_GAIT_CACHE=off`` solves every
-time. Removing the directory forgets every solve."""
+time. A key being solved is solved once: the processes that ask for it meanwhile wait for that
+solve. Removing the directory forgets every solve."""
 
 from __future__ import annotations
 
+import fcntl
 import os
 from functools import lru_cache
 from pathlib import Path
@@ -55,8 +57,16 @@ def _memoized(directory: Path) -> Callable:
 
 def cached(kind: str, key: tuple, solve: Callable[[], Any]) -> Any:
     """``solve()``'s result, from the cache if this code solved ``kind`` for ``key`` before (NumPy
-    arrays, numbers, strings and frozen dataclasses of them), else solved and kept."""
+    arrays, numbers, strings and frozen dataclasses of them), else solved and kept. One process or
+    thread solves a key at a time: the others asking for it meanwhile wait for its answer (a lock
+    file per key beside the results, left there)."""
     directory = cache_directory()
     if directory is None:
         return solve()
-    return _memoized(directory)(kind, core_digest(), key, solve)
+    from joblib import hash as key_hash
+
+    code = core_digest()
+    directory.mkdir(parents=True, exist_ok=True)
+    with open(directory / f"{kind}-{key_hash((kind, code, key))}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
+        return _memoized(directory)(kind, code, key, solve)
