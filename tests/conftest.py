@@ -105,9 +105,11 @@ def pytest_runtest_protocol(item, nextitem):
 # --no-loadscope-reorder) hands each worker a module at a time in collection order, so these go first
 # and the short modules, after them, even out the workers' ends; its own order, by the number of
 # tests, left long modules of few tests for last, one worker walking on alone. The order changes no
-# test's outcome; a module missing here only starts later.
-LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "test_actuated_ros", "test_planner_node",
-                 "test_simulator_turning", "test_doc_examples", "test_lasting", "test_simulator_node", "test_lasting_hips",
+# test's outcome; a module missing here only starts later. test_actuated_ros after test_actuated_walk
+# by two modules: its planner takes the walkable actuated swing that test_actuated_walk solved and
+# kept (solve_cache), where at once it would wait for that solve with its worker idle.
+LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "test_planner_node",
+                 "test_simulator_turning", "test_actuated_ros", "test_doc_examples", "test_lasting", "test_simulator_node", "test_lasting_hips",
                  "test_actuated_swing", "test_faults_inputs", "test_simulator_lasting", "test_standing",
                  "test_simulator_standing", "test_simulator_walking", "test_walking_page", "test_simulator_start_stop",
                  "test_dask", "test_lasting_walk", "test_turning", "test_hips_speeds", "test_sim_time", "test_atlas",
