@@ -43,8 +43,9 @@ TYPES = {"/joint_states": JointState, "/odom": Odometry, "/angular_momentum": An
          "/gait_events": GaitEvent, "/tf": TFMessage}
 # s, on 99 % of the intervals between successive /joint_states messages (2 ms apart: 500 Hz). The
 # replay's wake-ups are the OS scheduler's: its 99th percentile measured 0.4 to 3.3 ms on a quiet
-# 2-core machine, 3.3 to 7.2 ms beside three CPU-bound processes (and 5.3 ms in a CI run).
-INTERVAL_TOLERANCE = 10e-3
+# 2-core machine, 3.3 to 7.2 ms beside three CPU-bound processes (5.3 ms in a CI run, 10.3 ms in
+# the fresh-clone run of 84d7235 on 2026-12-06, whose suite ran 1.5x slower than that CI's).
+INTERVAL_TOLERANCE = 20e-3
 HICCUP_TOLERANCE = 0.05  # s, on every interval (the replay's process may be scheduled late once)
 DURATION_TOLERANCE = 0.02  # relative, on the time from the first to the last /joint_states message
 
