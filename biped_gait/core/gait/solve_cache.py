@@ -4,8 +4,8 @@ each) answered again at once when the same code solves the same program for the 
 joblib's ``Memory`` keeps each result under a hash of its key: the kind of solve, this package's
 ``core`` code (any change to it is another key), the parameter set, the gait's ends as the
 program sees them (the touchdown posture, the velocities before and after, the period: their
-exact bytes, so a gait planned otherwise on another machine is another key), the planner's
-settings and the request. The directory is ``$BIPED_GAIT_CACHE`` if set, else
+exact bytes, so a gait planned otherwise on another machine is another key), the flow's steps
+and kind, the friction, and the request. The directory is ``$BIPED_GAIT_CACHE`` if set, else
 ``$XDG_CACHE_HOME/biped_gait`` (``~/.cache`` by default); ``BIPED_GAIT_CACHE=off`` solves every
 time. A key being solved is solved once: the processes that ask for it meanwhile wait for that
 solve. Removing the directory forgets every solve."""
