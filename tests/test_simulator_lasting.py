@@ -1,6 +1,6 @@
 """The simulator walks a double support that lasts (docs/model.md section 14.1) over Fast DDS, with
 a planner of its own: -p double_support:=0.1 plans it (the planner's IPOPT solve) and walks 20 steps
-in the hybrid engine, each double support on /gait_phase for its 0.1 s, the planned torques and the
+in the hybrid engine, for the paper's 9-joint biped and the 13-joint one with its hips, each double support on /gait_phase for its 0.1 s, the planned torques and the
 feedback's on /joint_states' efforts in it (none in the ballistic single support); MuJoCo is
 refused with its reason, exit status 2."""
 
@@ -19,11 +19,15 @@ DURATION = 0.1  # s
 STEPS = 20
 
 
-def test_the_simulator_walks_a_double_support_that_lasts(tmp_path):
+@pytest.mark.parametrize("params", ["aoustin2013", "aoustin2013-hips"])
+def test_the_simulator_walks_a_double_support_that_lasts(tmp_path, params):
     """20 steps, no fall, exit status 0; every step's double support on /gait_phase from its first
-    sample to the next single support, d to within a sample (publish_rate 500 Hz)."""
+    sample to the next single support, d to within a sample (publish_rate 500 Hz); for both
+    parameter sets (with lateral hip joints the feet held in x, y, z and heading, the kinematic leg
+    exchange at each lift-off; its cycle is tests/test_lasting_hips.py's, from the session's solve
+    cache when that module solved it first)."""
     with planner_process(PLANNER, tmp_path):
-        recorded = walk_recorded(tmp_path, PLANNER, STEPS, f"double_support:={DURATION}")
+        recorded = walk_recorded(tmp_path, PLANNER, STEPS, f"double_support:={DURATION}", f"params:={params}")
     spans = double_supports(recorded)
     assert len(spans) >= STEPS - 1
     assert all(abs(b - a - DURATION) <= 2 / 500 + 1e-9 for a, b in spans), spans

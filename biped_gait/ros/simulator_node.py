@@ -252,9 +252,6 @@ class SimulatorNode(Node):
         try:
             params = load_params(value["params"] or None)
             validate_request(GaitRequest(**resolve_unset({**gait, "params": ""})), params)
-            if value["double_support"] > 0.0 and params.joints.lateral_hips:
-                raise ValueError(f"double_support: {params.name}'s lasting double support is planned but not walked "
-                                 "yet (its feet's spin moments and the kinematic leg exchange; docs/model.md 14)")
         except ValueError as exc:
             raise ValueError(f"{exc} (the requested plan's parameters: SI units, angles in rad here; the biped-gait "
                              "command takes degrees)") from None

@@ -78,6 +78,13 @@ from .solve_cache import cached
 # stop and the start (a second or so) on 10: on 20 IPOPT did not finish either at d = 1 s (1,000
 # iterations; infeasibility detected) where on 10 it does (about 120 and 330 iterations).
 INTERVALS = {"periodic": 20, "stop": 10, "start": 10, "limit": 0}
+# With lateral hip joints the walked cycle needs a finer mesh (docs/model.md 14.1). Walked by the
+# hybrid engine from its lift-off (d = 0.1 s, the default gait), the touchdowns' distance to the
+# plan grows by about 0.01 rad/s a step on 20 intervals, the stance foot slipping in the 20th step
+# (0.585 > 0.5), though the plan's reference keeps 49.1 N between its points (50 at them); on 30 it
+# stays within 1.4e-3 rad/s over 25 steps (on 40, 0.014: which mesh the walk follows best is
+# measured, not monotone). Measured 2026-12-06; a cold solve takes about 80 s on 30 against 40 s.
+LATERAL_HIPS_PERIODIC = 30
 TOLERANCE = 1e-9  # IPOPT's tolerance on the scaled KKT conditions and on the constraint violation
 MAX_ITERATIONS = 1000  # the solves that converge take 200 to 600
 # The unknowns' magnitudes (``_Program.var``); forces and impulses scale with the weight.
@@ -717,8 +724,10 @@ class LastingPlanner:
     def program(self, kind: str, effort: str) -> LastingProgram:
         key = (kind, effort)
         if key not in self.programs:
-            self.programs[key] = LastingProgram(self.bm, kind, INTERVALS[kind], effort,
-                                                self.friction, self.exchange, self.flow)
+            intervals = INTERVALS[kind]
+            if kind == "periodic" and self.bm.params.joints.lateral_hips:
+                intervals = LATERAL_HIPS_PERIODIC
+            self.programs[key] = LastingProgram(self.bm, kind, intervals, effort, self.friction, self.exchange, self.flow)
         return self.programs[key]
 
     def boundary(self, gait, q_rest: np.ndarray | None = None) -> Boundary:
