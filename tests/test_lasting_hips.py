@@ -156,9 +156,9 @@ def test_the_hips_cycle_is_walked_twenty_steps(planner, gait, cycle):
     the double support tracked with both feet held in x, y, z and heading, the kinematic leg
     exchange at each lift-off): twenty steps without a fall, each lasting T + d, both feet pressing
     in every sample of each double support, every torque within the joints' 200 N m; the touchdowns
-    stay near the plan's (docs/model.md 14.1: within 1.4e-3 rad/s over 25 steps on the mesh of
+    stay near the plan's (docs/model.md 14.1: within 1.2e-3 rad/s over 20 steps on the mesh of
     ``LATERAL_HIPS_PERIODIC``; the bound is a tenth of the 0.14 rad/s the 20-interval plan drifted to
-    before its fall, so a mesh that does not resolve the walk fails here)."""
+    before its fall, so a plan whose mesh the walk cannot follow fails here)."""
     orbit = lasting_orbit(PlannedOrbit.of(gait), cycle, planner.hybrid)
     walker = Walker(planner.hybrid, orbit, 100.0)
     outcomes = [walker.walk_step() for _ in range(20)]

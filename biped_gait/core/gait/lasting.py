@@ -82,8 +82,8 @@ INTERVALS = {"periodic": 20, "stop": 10, "start": 10, "limit": 0}
 # hybrid engine from its lift-off (d = 0.1 s, the default gait), the touchdowns' distance to the
 # plan grows by about 0.01 rad/s a step on 20 intervals, the stance foot slipping in the 20th step
 # (0.585 > 0.5), though the plan's reference keeps 49.1 N between its points (50 at them); on 30 it
-# stays within 1.4e-3 rad/s over 25 steps (on 40, 0.014: which mesh the walk follows best is
-# measured, not monotone). Measured 2026-12-06; a cold solve takes about 80 s on 30 against 40 s.
+# stays within 1.6e-3 rad/s over 40 steps (on 40, 0.014 over 30: which mesh the walk follows best
+# is measured, not monotone). Measured 2026-12-06; a cold solve takes about 80 s on 30, 40 s on 20.
 LATERAL_HIPS_PERIODIC = 30
 TOLERANCE = 1e-9  # IPOPT's tolerance on the scaled KKT conditions and on the constraint violation
 MAX_ITERATIONS = 1000  # the solves that converge take 200 to 600
