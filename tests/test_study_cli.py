@@ -145,16 +145,17 @@ def test_figure_commands_write_png(tmp_path, name, options):
 @pytest.mark.timeout(300)
 def test_results_page_is_generated_with_its_figures(tmp_path):
     """Every section and figure of the page, on coarse spacings (the arm amplitudes; the walk's
-    closed loops and pushes at alpha 0 only, and alpha*; the maps' optima on one atlas node in 4
-    along L and T) and a part of the pulses and push directions (docs/results.md is made with the
-    finer defaults); the lasting double support's and the actuated swing's sections from their stored studies,
-    copied beside the page."""
+    closed loops and pushes at alpha 0 only, and alpha*; the maps' optima on one atlas node in 8
+    along L and T: 3 on each set's atlas, 10 and 6 in 4; the boundary's 17 bisections alike) and a
+    part of the pulses and push directions (docs/results.md is made with the finer defaults); the
+    lasting double support's and the actuated swing's sections from their stored studies, copied
+    beside the page."""
     page = tmp_path / "docs" / "results.md"
     page.parent.mkdir()
     shutil.copy(LASTING_STUDY, page.parent)
     shutil.copy(ACTUATED_STUDY, page.parent)
     proc = run("results-page", "--out", str(page), "--alpha-step", "7.5", "--walk-alpha-step", "90", "--workers", "2",
-               "--pulse-durations", "5", "--push-directions", "left", "right", "--map-stride", "4", timeout=280)
+               "--pulse-durations", "5", "--push-directions", "left", "right", "--map-stride", "8", timeout=280)
     assert proc.returncode == 0, proc.stderr
     text = page.read_text()
     for heading in ("## Parameter set `aoustin2013` (default)", "## Parameter set `aoustin2013-table`",
@@ -176,7 +177,7 @@ def test_results_page_is_generated_with_its_figures(tmp_path):
     assert "| 0.45 | 0.45 | " in text and "| 23.50 | " in text and "| 101.90 |" in text  # the paper's numbers beside
     assert "| 0.45 | 0.50 | " in text and "T+ about the new stance foot | normal | 7.65 |" in text
     assert "no interior minimum for any L" in text  # the table inertia, from computed numbers
-    assert "from optimizations on one atlas node in 4 along L and T, these maps" in text
+    assert "from optimizations on one atlas node in 8 along L and T, these maps" in text
     assert "by differences of the walker's step, L = 0.40, 0.45, 0.50 m, alpha 0 deg" in text
     assert "| 5 | 20 | " in text and "The largest d tried that walks 20 steps: 5 ms." in text  # MuJoCo, 5 ms pulses
     assert "| forward | - | - | - |" in text and "The walker takes larger pushes to the " in text  # left and right only
