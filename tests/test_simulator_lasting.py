@@ -1,8 +1,9 @@
 """The simulator walks a double support that lasts (docs/model.md section 14.1) over Fast DDS, with
 a planner of its own: -p double_support:=0.1 plans it (the planner's IPOPT solve) and walks 20 steps
-in the hybrid engine, for the paper's 9-joint biped and the 13-joint one with its hips, each double support on /gait_phase for its 0.1 s, the planned torques and the
-feedback's on /joint_states' efforts in it (none in the ballistic single support); MuJoCo is
-refused with its reason, exit status 2."""
+in the hybrid engine, for the paper's 9-joint biped and the 13-joint one with its hips, each double
+support on /gait_phase for its 0.1 s, the planned torques and the feedback's on /joint_states'
+efforts in it (none in the ballistic single support); MuJoCo is refused with its reason, exit
+status 2."""
 
 from __future__ import annotations
 

@@ -727,7 +727,8 @@ class LastingPlanner:
             intervals = INTERVALS[kind]
             if kind == "periodic" and self.bm.params.joints.lateral_hips:
                 intervals = LATERAL_HIPS_PERIODIC
-            self.programs[key] = LastingProgram(self.bm, kind, intervals, effort, self.friction, self.exchange, self.flow)
+            self.programs[key] = LastingProgram(self.bm, kind, intervals, effort, self.friction, self.exchange,
+                                                self.flow)
         return self.programs[key]
 
     def boundary(self, gait, q_rest: np.ndarray | None = None) -> Boundary:
