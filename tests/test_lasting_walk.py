@@ -17,6 +17,8 @@ from biped_gait.core.walking.orbit import PlannedOrbit
 from biped_gait.core.walking.runner import Walker
 from biped_gait.core.walking.walk import Walk
 
+from .lasting_steps import check_lasting_step
+
 DURATION = 0.1  # s
 RATE = 100.0  # samples per second
 STEPS = 20
@@ -62,16 +64,8 @@ def test_the_first_steps_walk_with_both_feet_down(walked):
     changing by less than 1 mrad/s a step by the twentieth)."""
     support, orbit, outcomes = walked
     for k, outcome in enumerate(outcomes):
-        assert not outcome.fall, f"step {k}: {outcome.fall}"
-        touchdown = outcome.touchdown
-        assert touchdown.t_step == pytest.approx(orbit.period + DURATION, abs=0.01)
-        double = [s for s in outcome.samples if s.phase == DOUBLE_SUPPORT]
-        assert len(double) >= round(DURATION * RATE) - 1
-        for sample in double:
-            assert len(sample.feet) == 2
-            assert np.all(sample.forces[:, 2] > 0.0)
-            assert np.max(np.abs(sample.torque)) <= 200.0 + 1e-9
-        report = touchdown.double_support
+        check_lasting_step(k, outcome, orbit.period + DURATION, DURATION, RATE)
+        report = outcome.touchdown.double_support
         assert report.duration == DURATION
         assert report.held_old[2] >= -1e-6 and report.held_new[2] >= -1e-6  # pressing, to HiGHS's tolerance
     errors = [outcome.touchdown.state_error for outcome in outcomes]
