@@ -148,8 +148,7 @@ def test_pause_resume_and_reset(planner_node, side, tmp_path):
     proc = simulator(tmp_path, "steps:=0", "real_time_factor:=1.0", "record:=false", "wait_for_subscribers:=1")
     services = {name: side.node.create_client(Trigger, f"/biped_gait_simulator/{name}") for name in ("pause", "resume", "reset")}
     try:
-        for client in services.values():
-            side.connect(client)
+        side.connect_all(services.values())
         side.wait(lambda: any(m.step >= 1 for m in momentum), 60.0)  # into the second step
         assert side.call(services["pause"], Trigger.Request()).success
         settle = time.monotonic() + 0.3
