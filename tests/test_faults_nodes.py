@@ -132,7 +132,8 @@ def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
     results = []
     for rounds in batches(tmp_path, start):
         clients = [(side.node.create_client(PlanGait, f"/{name}/plan_gait"),
-                    ActionClient(side.node, OptimizeArmSwing, f"/{name}/optimize_arm_swing")) for _, (name, _) in rounds]
+                    ActionClient(side.node, OptimizeArmSwing, f"/{name}/optimize_arm_swing"))
+                   for _, (name, _) in rounds]
         side.connect_all([client for client, _ in clients])
         for _, action in clients:
             assert action.wait_for_server(timeout_sec=30.0)
