@@ -105,16 +105,22 @@ def pytest_runtest_protocol(item, nextitem):
 # --no-loadscope-reorder) hands each worker a module at a time in collection order, so these go first
 # and the short modules, after them, even out the workers' ends; its own order, by the number of
 # tests, left long modules of few tests for last, one worker walking on alone. The order changes no
-# test's outcome; a module missing here only starts later. test_actuated_ros after test_actuated_walk
-# by two modules: its planner takes the walkable actuated swing that test_actuated_walk solved and
-# kept (solve_cache), where at once it would wait for that solve with its worker idle.
-LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "test_planner_node",
-                 "test_simulator_turning", "test_actuated_ros", "test_doc_examples", "test_lasting", "test_simulator_node", "test_lasting_hips",
+# test's outcome; a module missing here only starts later. test_actuated_walk and test_lasting_hips,
+# whose set-ups are the suite's two longest cold solves (IPOPT, 80 to 120 s each, one core each), side
+# by side once the first two modules are done, when no test marked ``paced`` is left to wait for
+# either: a paced test waits for the other worker's test in progress, and a set-up is one test.
+# test_actuated_ros after test_actuated_walk by four modules: its planner takes the walkable actuated
+# swing that test_actuated_walk solved and kept (solve_cache), where at once it would wait for that
+# solve with its worker idle. test_simulator_node (a paced test) among the modules of short tests, its
+# wait for the other worker's test in progress short.
+LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "test_lasting_hips", "test_planner_node",
+                 "test_simulator_turning", "test_actuated_ros", "test_doc_examples", "test_lasting",
                  "test_actuated_swing", "test_faults_inputs", "test_simulator_lasting", "test_standing",
                  "test_simulator_standing", "test_simulator_walking", "test_walking_page", "test_simulator_start_stop",
                  "test_dask", "test_lasting_walk", "test_turning", "test_hips_speeds", "test_sim_time", "test_atlas",
-                 "test_conversions", "test_replay", "test_launch", "test_analyze", "test_sweep", "test_optimize",
-                 "test_walk", "test_cli", "test_speed", "test_reference_figures", "test_effort_options")
+                 "test_conversions", "test_simulator_node", "test_replay", "test_launch", "test_analyze", "test_sweep",
+                 "test_optimize", "test_walk", "test_cli", "test_speed", "test_reference_figures",
+                 "test_effort_options")
 
 
 def pytest_collection_modifyitems(config, items):

@@ -131,13 +131,12 @@ def test_the_planner_stops_cleanly_during_requests(side, tmp_path, sig):
 
     results = []
     for rounds in batches(tmp_path, start):
-        clients = []
-        for where, (name, _) in rounds:
-            client = side.node.create_client(PlanGait, f"/{name}/plan_gait")
-            action = ActionClient(side.node, OptimizeArmSwing, f"/{name}/optimize_arm_swing")
-            side.connect(client)
+        clients = [(side.node.create_client(PlanGait, f"/{name}/plan_gait"),
+                    ActionClient(side.node, OptimizeArmSwing, f"/{name}/optimize_arm_swing"))
+                   for _, (name, _) in rounds]
+        side.connect_all([client for client, _ in clients])
+        for _, action in clients:
             assert action.wait_for_server(timeout_sec=30.0)
-            clients.append((client, action))
         for client, action in clients:
             action.send_goal_async(optimize_goal(step_length=0.45, period=0.45, alpha_min=0.0, alpha_max=0.78))
             for k in range(30):

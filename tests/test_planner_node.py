@@ -134,8 +134,7 @@ def test_bad_requests_are_refused_and_the_node_keeps_serving(ros, default_gait):
 def test_eight_concurrent_clients_all_get_correct_answers(ros, planner):
     alphas = np.radians(np.linspace(18.0, 30.0, 8))
     clients = [ros.node.create_client(PlanGait, SERVICE) for _ in alphas]
-    for c in clients:
-        ros.connect(c)
+    ros.connect_all(clients)
     futures = [c.call_async(plan_request(arm_amplitude=float(a))) for c, a in zip(clients, alphas)]
     ros.wait(lambda: all(f.done() for f in futures), timeout=60.0)
     for alpha, future in zip(alphas, futures):
@@ -567,8 +566,7 @@ def test_run_time_parameters_are_applied_and_the_others_refused_with_a_reason(tm
         setter = side.node.create_client(SetParameters, f"/{name}/set_parameters")
         describe = side.node.create_client(DescribeParameters, f"/{name}/describe_parameters")
         planner = side.node.create_client(PlanGait, f"/{name}/plan_gait")
-        for client in (setter, describe, planner):
-            side.connect(client)
+        side.connect_all((setter, describe, planner))
 
         def set_(parameter: str, new: ParameterValue):
             return side.call(setter, SetParameters.Request(parameters=[ParameterMsg(name=parameter, value=new)])).results[0]

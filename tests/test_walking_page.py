@@ -74,5 +74,9 @@ def test_the_walking_section_and_its_figures(default_gait, planner, tmp_path):
     assert "## The walk: stability, pushes, commanded speed" in text
     assert f"by differences of the walker's step, L = 0.40, 0.45 m, alpha {math.degrees(alpha):g} deg)" in text
     assert f"| left | {pushes[0].limit:.3g} | {pushes[1].limit:.3g} | {plain[0].limit:.3g} |" in text
+    left, right = pushes[1].limit, pushes[2].limit  # at alpha: the side taking the larger push said, both figures
+    side = "to the left, towards the swing foot's side," if left > right else "to the right, over the stance foot,"
+    assert f"The walker takes larger pushes {side} than to the " in text
+    assert f"({left:.3g} against {right:.3g} N s at alpha*)" in text
     assert all(f"]({name})" in text for name in paths.values())
     assert np.isfinite([s.W for s in ramp]).all() and len(ramp) >= 9

@@ -62,8 +62,15 @@ class ClientSide:
     def connect(self, client, timeout: float = 30.0) -> None:
         """Wait for a service, then let discovery finish the server's side: a response sent
         before the server has matched this client's reader is lost (a DDS race)."""
-        if not client.wait_for_service(timeout_sec=timeout):
-            raise TimeoutError(f"service {client.srv_name} did not appear in {timeout:g} s")
+        self.connect_all([client], timeout)
+
+    def connect_all(self, clients, timeout: float = 30.0) -> None:
+        """``connect`` for several clients at once: each service waited for (``timeout`` s each),
+        then one settle of a second after the last, which every client has had since its own
+        service appeared (a second each, one after the other, took as many seconds as clients)."""
+        for client in clients:
+            if not client.wait_for_service(timeout_sec=timeout):
+                raise TimeoutError(f"service {client.srv_name} did not appear in {timeout:g} s")
         settle = time.monotonic() + 1.0
         self.wait(lambda: time.monotonic() > settle, 5.0)
 
