@@ -52,7 +52,7 @@ def _plan(sub) -> None:
     plan.add_argument("--actuated-swing", type=float, default=0.0, metavar="S",
                       help="the swing actuated for its first and last S seconds, with torques within the joints' "
                       "effort limits, and ballistic between, in place of the impulses (the least-effort cycle, "
-                      "solved by IPOPT; legs of pitch joints only; the simulator walks the variant the planner node serves, "
+                      "solved by IPOPT; the simulator walks the variant the planner node serves, "
                       "docs/ros.md); default 0, the impulses")
     plan.add_argument("--out", type=Path, metavar="DIR", help="write plan.json and plan.png (the step: the biped from "
                       "the side, joint angles, ground reaction and friction ratio, yaw momentum) in this folder")

@@ -1,7 +1,9 @@
 """The lasting double support with lateral hip joints (aoustin2013-hips, core/gait/lasting.py,
 docs/model.md section 14): the periodic cycle at d = 0.1 s checked through Pinocchio, the model's
 own leg exchange and the planner's flow, independently of the program's symbols; the CLI; and the
-cycle walked by the hybrid engine."""
+cycle walked by the hybrid engine. Then the swing actuated at its two ends for the same set
+(core/gait/actuated_swing.py, docs/model.md section 15), started from that cycle, checked the same
+way."""
 
 from __future__ import annotations
 
@@ -14,6 +16,7 @@ import pinocchio as pin
 import pytest
 
 from biped_gait.cli import main as cli_main
+from biped_gait.core.gait.actuated_swing import ActuatedSwingPlanner, SwingRequest
 from biped_gait.core.gait.lasting import LastingRequest
 from biped_gait.core.gait.lasting_support import IMPULSE_TIME
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
@@ -29,6 +32,7 @@ from .lasting_steps import check_lasting_step
 DEFAULT = GaitRequest(0.45, 0.45, math.radians(23.5))
 SOLVER = 1e-6  # as tests/test_lasting.py: a thousand times IPOPT's 1e-9 in the unknowns' units
 STEP = 1e-6  # rad, m: the heading's central differences (their error about 1e-12 rad per unit)
+TAU = 0.1  # s, each actuated end of the swing
 
 
 @pytest.fixture(scope="module")
@@ -167,3 +171,59 @@ def test_the_hips_cycle_is_walked_twenty_steps(planner, gait, cycle):
         check_lasting_step(k, outcome, gait.problem.period + 0.1, 0.1, 100.0)
     errors = [outcome.touchdown.state_error for outcome in outcomes]
     assert errors[0] < 1e-8 and max(errors) < 0.014
+
+
+@pytest.fixture(scope="module")
+def swing(planner, gait, cycle):
+    """(tau, d) = (0.1, 0.1) s at the default gait, the least effort (``plan --actuated-swing 0.1
+    --double-support 0.1``'s request), started from the module's lasting cycle: about a minute on
+    the project's 2-core machine (docs/model.md 15)."""
+    return ActuatedSwingPlanner(planner.lasting).cycle(gait, SwingRequest(TAU, LastingRequest(0.1)), seed=cycle)
+
+
+def test_the_hips_actuated_swing_holds_its_physics(planner, swing):
+    """At every sample of both actuated ends: the single support's equations through Pinocchio's
+    inverse dynamics, the stance tip's force applied through its Jacobian and the foot's spin moment
+    on its spin coordinate, within 1e-6 of m g; the force pressing within the friction pyramid and the
+    spin moment within the torsional friction; the swing tip not below the ground; no torque above
+    its limit (N m; at it on most joints: measured 200 on all but the stance hip's yaw, 46, and the
+    swing knee, 140)."""
+    assert swing.success, swing.message
+    bm = planner.model
+    weight, mu = bm.total_mass * bm.params.gravity, bm.params.friction
+    spin = bm.ds_names.index(STANCE_SPIN)
+    at = np.asarray(bm.ds_of_single)
+    limits = np.array([bm.coordinates[k].spec.limits.effort for k in bm.actuated])
+    for end in (swing.start, swing.end):
+        assert len(end.t) >= 11 and end.t[-1] - end.t[0] == pytest.approx(TAU)
+        for x, xd, xdd, torque, force, moment in zip(end.x, end.xd, end.xdd, end.torques, end.contact_forces,
+                                                     end.spin_moments):
+            generalized = pin.rnea(bm.double_support, bm.double_support_data, x, xd, xdd)
+            applied = bm.tip_jacobians(x[at])[0].T @ force
+            applied[spin] += moment
+            applied[bm.ds_actuated] += torque
+            assert np.max(np.abs(generalized - applied)) < 1e-6 * weight
+            assert force[2] > 0.0 and np.hypot(force[0], force[1]) <= mu * force[2] + SOLVER * weight
+            assert abs(moment) <= TORSIONAL_FRICTION * force[2] + SOLVER * weight
+            assert bm.swing_tip(x[at])[2] > -1e-9
+            assert np.all(np.abs(torque) <= limits + SOLVER * 100)
+    assert np.all(swing.peak_torque <= limits + SOLVER * 100)
+
+
+def test_the_hips_actuated_swing_is_periodic(planner, gait, swing):
+    """The ballistic part, flown by the planner's flow from the actuated start's end over T - 2 tau,
+    reaches the actuated end's first state; the end lands on the touchdown posture, softly (both held
+    impulses vanish); the next step starts from the double support's end through the model's
+    kinematic leg exchange (``KinematicExchange``: the joint map and the landing shin's roll and pitch,
+    computed apart from the program's symbols), the state continuous."""
+    bm, exchange = planner.model, planner.hybrid.exchange
+    at, nq = np.asarray(bm.ds_of_single), bm.nq
+    period = gait.problem.period
+    res = planner.flow.propagate(swing.flow_start[:nq], swing.flow_start[nq:], period - 2 * TAU)
+    assert np.max(np.abs(res.q - swing.end.x[0, at])) < 1e-7
+    assert np.max(np.abs(res.qd - swing.end.xd[0, at])) < 1e-6
+    assert np.max(np.abs(swing.end.x[-1, at] - gait.step.q_target)) < 1e-9
+    assert np.max(np.abs(swing.support.held_impact_impulses)) < 1e-6
+    lift_off = swing.support.x[-1, at]
+    assert np.max(np.abs(swing.start.x[0, at] - exchange.configuration(lift_off))) < 1e-9
+    assert np.max(np.abs(swing.start.xd[0, at] - exchange.velocity(lift_off, swing.support.xd[-1]))) < 1e-7

@@ -170,7 +170,8 @@ PARAMETERS = (
     Param("actuated_swing", 0.0, "the swing actuated for its first and its last tau s (s), with torques within the "
           "joints' effort limits, and ballistic between: 0 the paper's ballistic swing with its impulses; > 0 the cycle "
           "planned by the planner (an IPOPT solve: about a minute before the walk starts) and tracked by the walk "
-          "(docs/model.md section 15.1). With double_support > 0 and engine 'hybrid'; /cmd_vel is not followed",
+          "(docs/model.md section 15.1). With double_support > 0, engine 'hybrid' and the 9-joint sets (aoustin2013-hips: "
+          "planned, not walked); /cmd_vel is not followed",
           0.0, 1.0),
     Param("pulse_duration", PULSE_DURATION, "with engine 'mujoco': the double support's duration d (s), its "
           "impulses spread into torques over d / 2 before and after the touchdown", 1e-4, 0.1),
@@ -216,10 +217,11 @@ PARAMETERS = (
 )
 
 
-def check_held_phases(double_support: float, actuated_swing: float, engine: str) -> None:
+def check_held_phases(double_support: float, actuated_swing: float, engine: str, params) -> None:
     """``ValueError`` (one line, the physical reason) for phases with the feet held that the walk
     cannot track: in MuJoCo (its floor holds the feet sideways, which the plans' chain leaves free),
-    or an actuated swing without a double support that lasts (planned at d = 0, not walked)."""
+    an actuated swing without a double support that lasts (planned at d = 0, not walked), or one of
+    the parameter set ``params`` with lateral hip joints (planned, not walked)."""
     for name, value in (("actuated_swing", actuated_swing), ("double_support", double_support)):
         if value > 0.0 and engine != "hybrid":
             raise ValueError(f"{name} {value:g} s needs engine 'hybrid': MuJoCo's floor holds the feet sideways, which "
@@ -227,6 +229,10 @@ def check_held_phases(double_support: float, actuated_swing: float, engine: str)
     if actuated_swing > 0.0 and double_support == 0.0:
         raise ValueError(f"actuated_swing {actuated_swing:g} s needs double_support > 0: the walk lands its actuated "
                          "swing into a double support that lasts (d = 0 is planned, not walked; docs/model.md 15.1)")
+    if actuated_swing > 0.0 and params.joints.lateral_hips:
+        raise ValueError(f"actuated_swing {actuated_swing:g} s with {params.name}: planned, not walked (its walk falls "
+                         "in the seventh step, its plan's torques at their limits leaving the feedback none to correct "
+                         "with; docs/model.md 15.1)")
 
 
 class NoPlan(RuntimeError):
@@ -246,7 +252,8 @@ class SimulatorNode(Node):
         self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
         check_initial_state(value["initial_state"], value["engine"])
-        check_held_phases(value["double_support"], value["actuated_swing"], value["engine"])
+        check_held_phases(value["double_support"], value["actuated_swing"], value["engine"],
+                          load_params(value["params"] or None))
         prepare_walking()  # what the walk loads once, now rather than when it starts
         gait = {name: value[name] for name in GAIT_NAMES}
         try:

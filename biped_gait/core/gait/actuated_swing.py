@@ -37,7 +37,7 @@ import numpy as np
 
 from ..dynamics.flow import hermite_samples
 from . import views
-from .lasting import (ACCELERATION, INTERVALS, TOLERANCE, TORQUE, WALK_FRICTION_MARGIN, WALK_LEAST_NORMAL_FORCE,
+from .lasting import (ACCELERATION, TOLERANCE, TORQUE, WALK_FRICTION_MARGIN, WALK_LEAST_NORMAL_FORCE,
                       LastingProgram, LastingRequest, _Program, hermite_simpson)
 from .lasting_support import LastingSupport
 
@@ -85,7 +85,9 @@ class SwingEnd:
     """One actuated end of the swing, sampled at its collocation points (2 n + 1 instants, both ends
     included): ``t`` (s, from the step's start), ``x``, ``xd``, ``xdd`` in the double-support
     coordinates X (the stance tip held at the origin), ``torques`` (N m, actuated joints) and
-    ``contact_forces`` (the stance tip's reaction, world axes, N, n x 3)."""
+    ``contact_forces`` (the stance tip's reaction, world axes, N, n x 3); with lateral hip joints
+    ``spin_moments``, the stance foot's moment about the vertical (N m, n; None for legs of pitch
+    joints, whose tips take none)."""
 
     t: np.ndarray
     x: np.ndarray
@@ -93,6 +95,7 @@ class SwingEnd:
     xdd: np.ndarray
     torques: np.ndarray
     contact_forces: np.ndarray
+    spin_moments: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,10 +155,6 @@ class ActuatedSwingProgram(LastingProgram):
     def __init__(self, bm, intervals: int, effort: str = "l1", friction: float = 0.5, exchange=None,
                  flow=None, swing_intervals: int = SWING_INTERVALS, bounded_between: bool = False) -> None:
         self.swing_intervals, self.bounded_between = swing_intervals, bounded_between
-        if bm.params.joints.lateral_hips:
-            raise ValueError(f"{bm.params.name}: an actuated swing is planned for legs of pitch joints only "
-                             "(aoustin2013, aoustin2013-table): the kinematic leg exchange at its lift-off is not "
-                             "written in its program yet")
         super().__init__(bm, "periodic", intervals, effort, friction, exchange, flow)
 
     def _build(self) -> None:
@@ -179,9 +178,10 @@ class ActuatedSwingProgram(LastingProgram):
         xh, p1, p2 = self._held_impact(nlp, xm, (self.f_mass(self._embed(p_q)), j1_t, j2_t), press)
         support = self._phase(nlp, p_d, p_q, xh[self.at.tolist()], None, False, tip_t, b, press, cost, p_least)
         # The lift-off, the state continuous: the next step's start is the phase's end exchanged.
-        exchange = ca.DM(self.exchange.matrix)
-        nlp.eq(start[0][0] - ca.mtimes(exchange, support[-1][0]), "the lift-off posture, legs exchanged")
-        nlp.eq(start[0][1] - ca.mtimes(exchange, support[-1][1]), "the lift-off velocity, legs exchanged")
+        q_l, v_l = support[-1][0], support[-1][1]
+        posture, velocity = self._exchanged(q_l, v_l, self._embed(v_l))
+        nlp.eq(start[0][0] - posture, "the lift-off posture, legs exchanged")
+        nlp.eq(start[0][1] - velocity, "the lift-off velocity, legs exchanged")
         outputs = {"p_old": p1, "p_new": p2, "flow_end": flow_end}
         for name, points, keys in (("start", start, ("q", "v", "a", "tau", "f")),
                                    ("end", end, ("q", "v", "a", "tau", "f")),
@@ -229,7 +229,7 @@ class ActuatedSwingProgram(LastingProgram):
             generalized = self.f_rnea(x, self._embed(v), self._embed(a))
             nlp.eq(generalized[self.at.tolist()] - ca.mtimes(b[self.at.tolist(), :], tau),
                    "the single support's equations of motion")
-            force = generalized[:3]
+            force = generalized[self.roots.tolist()]
             press(force, "the stance tip's reaction", least)
             if 0 < k < len(points) - 1:  # at the lift-off and the touchdown the tip is on the ground
                 nlp.le(-self.f_tip(x)[0][2], "the swing tip above the ground")
@@ -296,9 +296,10 @@ class ActuatedSwingProgram(LastingProgram):
         n_swing = 2 * self.swing_intervals + 1
         ends = {}
         for name, t0 in (("start", 0.0), ("end", period - tau)):
+            reaction = out[f"{name}_f"]
             ends[name] = SwingEnd(t0 + np.linspace(0.0, tau, n_swing), self._embed_array(out[f"{name}_q"]),
                                   self._embed_array(out[f"{name}_v"]), self._embed_array(out[f"{name}_a"]),
-                                  out[f"{name}_tau"], out[f"{name}_f"])
+                                  out[f"{name}_tau"], reaction[:, :3], None if self.lateral_free else reaction[:, 3])
         swing_weights = _simpson_weights(self.swing_intervals, tau)
         support_weights = _simpson_weights(self.intervals, d)
         tau_s = out["support_tau"]
@@ -307,12 +308,13 @@ class ActuatedSwingProgram(LastingProgram):
         support_l1 = float(support_weights @ np.abs(tau_s).sum(axis=1))
         support_l2 = float(support_weights @ (tau_s ** 2).sum(axis=1))
         none = np.zeros(self.na)
+        forces, held, spin_moments = self._reactions({"f_old": out["support_f_old"], "f_new": out["support_f_new"],
+                                                      "p_old": out["p_old"], "p_new": out["p_new"]})
         support = LastingSupport(
             d, bool(stats["success"]), "solved", np.linspace(0.0, d, 2 * self.intervals + 1),
             self._embed_array(out["support_q"]), self._embed_array(out["support_v"]),
-            self._embed_array(out["support_a"]), tau_s, np.stack([out["support_f_old"], out["support_f_new"]], axis=1),
-            none, none, np.stack([out["p_old"].ravel(), out["p_new"].ravel()]), support_l1, support_l2, support_l1,
-            0, 0.0)
+            self._embed_array(out["support_a"]), tau_s, forces, none, none, held, support_l1, support_l2, support_l1,
+            0, 0.0, spin_moments=spin_moments)
         success = bool(stats["success"])
         message = "solved" if success else (f"no cycle with a swing actuated for {tau:g} s at each end and a double "
                                             f"support of {d:g} s: IPOPT {stats['return_status']}; "
@@ -335,7 +337,7 @@ class ActuatedSwingPlanner:
         key = (lasts, request.support.effort, request.swing_intervals, request.bounded_between)
         if key not in self.programs:
             lp = self.lasting
-            self.programs[key] = ActuatedSwingProgram(lp.bm, INTERVALS["periodic"] if lasts else 1,
+            self.programs[key] = ActuatedSwingProgram(lp.bm, lp.program("periodic", request.support.effort).intervals if lasts else 1,
                                                       request.support.effort, lp.friction, lp.exchange, lp.flow,
                                                       request.swing_intervals, request.bounded_between)
         return self.programs[key]
@@ -365,13 +367,14 @@ class ActuatedSwingPlanner:
         moving with the held velocity)."""
         bm, tau, lasting = self.lasting.bm, request.actuated_swing, self.lasting
         boundary = lasting.boundary(gait)
-        at, matrix = np.asarray(bm.ds_of_single), lasting.exchange.matrix
+        at, configuration = np.asarray(bm.ds_of_single), lasting.exchange.configuration
         lasts = seed.duration > 0.0
-        held = lasting.program("periodic" if lasts else "limit", request.support.effort).values(seed.solution)
+        seeded = lasting.program("periodic" if lasts else "limit", request.support.effort)
+        held = seeded.values(seed.solution)
         if lasts:
-            q0, qd0 = matrix @ seed.x[-1, at], seed.next_start_velocity
+            q0, qd0 = configuration(seed.x[-1, at]), seed.next_start_velocity
         else:  # the gait's own start
-            q0, qd0 = matrix @ boundary.q_t, lasting.exchange.velocity(boundary.q_t, boundary.xd_a)
+            q0, qd0 = configuration(boundary.q_t), lasting.exchange.velocity(boundary.q_t, boundary.xd_a)
         nodes = lasting.flow.propagate(q0, qd0, boundary.period, keep_nodes=True).nodes
         values: dict[str, list] = {"xd_held": [held["xd_held"]], "p_old": [held["p_old"]], "p_new": [held["p_new"]]}
 
@@ -389,12 +392,16 @@ class ActuatedSwingPlanner:
         q_end, qd_end = sample("end", boundary.period - tau)
         values["flow_end"] = [np.concatenate([q_end[0], qd_end[0]])]
         values["end_q"], values["end_v"] = values["end_q"][1:], values["end_v"][1:]  # its first state: the flow's end
-        weight = np.array([0.0, 0.0, bm.total_mass * bm.params.gravity / 2])
+        weight = np.zeros(seeded.reaction_size)  # the new tip's reaction: half the weight, no spin moment
+        weight[2] = bm.total_mass * bm.params.gravity / 2
         if lasts:
             x, xd, xdd, torques = seed.x[:, at], seed.xd[:, at], seed.xdd[:, at], seed.torques
             values.update(q=list(x[0::2]), v=list(xd[0::2]), a=list(xdd[0::2]), a_mid=list(xdd[1::2]),
                           tau=list(torques[0::2]), tau_mid=list(torques[1::2]),
                           f_new=list(seed.contact_forces[0::2, 1]), f_new_mid=list(seed.contact_forces[1::2, 1]))
+            if seed.spin_moments is not None:  # lateral hips: the new tip's reaction holds its spin moment
+                forces = np.concatenate([seed.contact_forces[:, 1], seed.spin_moments[0][:, 1:2]], axis=1)
+                values.update(f_new=list(forces[0::2]), f_new_mid=list(forces[1::2]))
         else:
             values.update(q=[boundary.q_t] * 2, v=[held["xd_held"][at]] * 2, f_new=[weight] * 2, f_new_mid=[weight])
         return values

@@ -416,19 +416,29 @@ class LastingProgram:
         new tip at rest and its foot's heading (``j2_l``), and maps onto ``qd_next`` by the joint
         map and the rates of the landing shin's roll and pitch. The heading phi itself is the new
         foot's, held from the touchdown (zero on a straight gait: the cycle does not turn)."""
-        nq, at = self.nq, self.at
-        q_next, xd_a = nlp.var("q_next", nq), nlp.var("xd_next", self.nx)
-        angles, rates = self.f_landing(self._embed(q_l), xd_a)
-        ankle = [self.bm.index("ankle_roll"), self.bm.index("ankle_pitch")]
-        posture, velocity = [None] * nq, [None] * nq
-        for i, j, sign in self.exchange.joints:
-            posture[i], velocity[i] = sign * q_l[j], sign * xd_a[int(at[j])]
-        for k, i in enumerate(ankle):
-            posture[i], velocity[i] = angles[k], rates[k]
-        nlp.eq(q_next - ca.vertcat(*posture), "the next step's start posture (the leg exchange)")
-        nlp.eq(qd_next - ca.vertcat(*velocity), "the next step's start velocity (the leg exchange)")
+        q_next, xd_a = nlp.var("q_next", self.nq), nlp.var("xd_next", self.nx)
+        posture, velocity = self._exchanged(q_l, xd_a[self.at.tolist()], xd_a)
+        nlp.eq(q_next - posture, "the next step's start posture (the leg exchange)")
+        nlp.eq(qd_next - velocity, "the next step's start velocity (the leg exchange)")
         nlp.eq(ca.mtimes(j2_l, xd_a), "the new tip at rest after I^+, its foot not turning")
         return xd_a
+
+    def _exchanged(self, q_l, v_l, xd):
+        """The leg exchange at the lift-off (symbolic): the next step's start posture and velocity
+        from the lift-off posture ``q_l`` and joint rates ``v_l`` (X's velocity ``xd``, whose old
+        tip may be leaving). Legs of pitch joints: the exchange's matrix; with lateral hips: its
+        joint map, the new stance ankle's roll and pitch those of the landing shin."""
+        if self.lateral_free:
+            matrix = ca.DM(self.exchange.matrix)
+            return ca.mtimes(matrix, q_l), ca.mtimes(matrix, v_l)
+        angles, rates = self.f_landing(self._embed(q_l), xd)
+        ankle = [self.bm.index("ankle_roll"), self.bm.index("ankle_pitch")]
+        posture, velocity = [None] * self.nq, [None] * self.nq
+        for i, j, sign in self.exchange.joints:
+            posture[i], velocity[i] = sign * q_l[j], sign * v_l[j]
+        for k, i in enumerate(ankle):
+            posture[i], velocity[i] = angles[k], rates[k]
+        return ca.vertcat(*posture), ca.vertcat(*velocity)
 
     def _finish(self, nlp: "_Program", params, outputs: dict, start_map: np.ndarray | None) -> None:
         """The program written (``nlp``, its parameters ``params``) made a solver, with the
@@ -675,30 +685,38 @@ class LastingProgram:
             t = np.linspace(0.0, duration, n_points)
             x, xd, xdd = embed(out["q"]), embed(out["v"]), embed(out["a"])
             tau = out["tau"]
-            reactions = np.stack([out["f_old"], out["f_new"]], axis=1)
-            forces, spin = reactions[..., :3], reactions[..., 3:]
             weights = np.array([1.0] + [4.0, 2.0] * (self.intervals - 1) + [4.0, 1.0]) * (duration / self.intervals) / 6
             l1 = float(weights @ np.abs(tau).sum(axis=1))
             l2 = float(weights @ (tau ** 2).sum(axis=1))
         else:
             t = np.zeros(0)
             x = xd = xdd = np.zeros((0, self.nx))
-            tau, forces, spin = np.zeros((0, self.na)), np.zeros((0, 2, 3)), np.zeros((0, 2, self.reaction_size - 3))
+            tau = np.zeros((0, self.na))
+            out = {"f_old": np.zeros((0, self.reaction_size)), "f_new": np.zeros((0, self.reaction_size)), **out}
             l1 = l2 = 0.0
         none = np.zeros(self.na)
         i_minus, i_plus = out.get("i_minus", none).ravel(), out.get("i_plus", none).ravel()
-        held = (np.stack([out["p_old"].ravel(), out["p_new"].ravel()]) if "p_old" in out
-                else np.zeros((2, self.reaction_size)))
+        forces, held, spin_moments = self._reactions(out)
         total = float(np.abs(i_minus).sum() + np.abs(i_plus).sum() + l1)
         success = bool(stats["success"])
         message = "solved" if success else (f"no {self.kind} double support of {duration:g} s: IPOPT "
                                             f"{stats['return_status']}; {self._worst(solution)}")
         next_start = out["qd_next"].ravel() if "qd_next" in out else None
         push_off = out["push_off"].ravel() if "push_off" in out else None
-        spin_moments = None if self.lateral_free else (spin[..., 0], held[:, 3])
-        return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held[:, :3], l1,
+        return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held, l1,
                               l2, total, int(stats["iter_count"]), elapsed, next_start, push_off, solution,
                               spin_moments)
+
+    def _reactions(self, out: dict) -> tuple[np.ndarray, np.ndarray, tuple | None]:
+        """The phase's reactions from the program's outputs ``f_old``, ``f_new`` (at the points) and
+        ``p_old``, ``p_new`` (the held impact's; zero where absent): the tips' forces (n x 2 x 3,
+        N), the held impulses (2 x 3, N s) and, with lateral hips, the spin moments about the
+        vertical (``LastingSupport.spin_moments``; None for legs of pitch joints)."""
+        reactions = np.stack([out["f_old"], out["f_new"]], axis=1)
+        held = (np.stack([out["p_old"].ravel(), out["p_new"].ravel()]) if "p_old" in out
+                else np.zeros((2, self.reaction_size)))
+        spin_moments = None if self.lateral_free else (reactions[..., 3], held[:, 3])
+        return reactions[..., :3], held[:, :3], spin_moments
 
     def _worst(self, solution: dict) -> str:
         """What the last iterate violates most, in the constraints' words and units."""

@@ -280,8 +280,7 @@ class GaitPlanner:
     def lasting_cycle(self, gait: Gait, request: "LastingRequest") -> tuple["LastingSupport", "LastingSupport"]:
         """``gait``'s periodic cycle with a double support of ``request.duration`` s and its
         impulsive limit d -> 0+ (the cycle's seed; its ``effort_total`` is E(0+)), what the ``plan``
-        verb and the planner node answer; ``ValueError`` for a parameter set the lasting planner is
-        not written for (lateral hip joints). The cycle is kept on disk (``LastingPlanner.periodic``)."""
+        verb and the planner node answer. The cycle is kept on disk (``LastingPlanner.periodic``)."""
         limit = self.lasting.limit(gait, request.effort)
         return self.lasting.periodic(gait, request, limit=limit), limit
 
