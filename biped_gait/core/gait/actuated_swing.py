@@ -337,7 +337,7 @@ class ActuatedSwingPlanner:
         key = (lasts, request.support.effort, request.swing_intervals, request.bounded_between)
         if key not in self.programs:
             lp = self.lasting
-            self.programs[key] = ActuatedSwingProgram(lp.bm, lp.program("periodic", request.support.effort).intervals if lasts else 1,
+            self.programs[key] = ActuatedSwingProgram(lp.bm, lp.intervals("periodic") if lasts else 1,
                                                       request.support.effort, lp.friction, lp.exchange, lp.flow,
                                                       request.swing_intervals, request.bounded_between)
         return self.programs[key]

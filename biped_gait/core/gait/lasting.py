@@ -739,14 +739,18 @@ class LastingPlanner:
         self.bm, self.exchange, self.flow, self.friction = bm, exchange, flow, friction
         self.programs: dict[tuple[str, str], LastingProgram] = {}
 
+    def intervals(self, kind: str) -> int:
+        """The collocation intervals of this model's program of ``kind`` (``INTERVALS``; the periodic
+        cycle of lateral hips on ``LATERAL_HIPS_PERIODIC``)."""
+        if kind == "periodic" and self.bm.params.joints.lateral_hips:
+            return LATERAL_HIPS_PERIODIC
+        return INTERVALS[kind]
+
     def program(self, kind: str, effort: str) -> LastingProgram:
         key = (kind, effort)
         if key not in self.programs:
-            intervals = INTERVALS[kind]
-            if kind == "periodic" and self.bm.params.joints.lateral_hips:
-                intervals = LATERAL_HIPS_PERIODIC
-            self.programs[key] = LastingProgram(self.bm, kind, intervals, effort, self.friction, self.exchange,
-                                                self.flow)
+            self.programs[key] = LastingProgram(self.bm, kind, self.intervals(kind), effort, self.friction,
+                                                self.exchange, self.flow)
         return self.programs[key]
 
     def boundary(self, gait, q_rest: np.ndarray | None = None) -> Boundary:
