@@ -230,9 +230,8 @@ def check_held_phases(double_support: float, actuated_swing: float, engine: str,
         raise ValueError(f"actuated_swing {actuated_swing:g} s needs double_support > 0: the walk lands its actuated "
                          "swing into a double support that lasts (d = 0 is planned, not walked; docs/model.md 15.1)")
     if actuated_swing > 0.0 and params.joints.lateral_hips:
-        raise ValueError(f"actuated_swing {actuated_swing:g} s with {params.name}: planned, not walked (its walk falls "
-                         "in the seventh step, its plan's torques at their limits leaving the feedback none to correct "
-                         "with; docs/model.md 15.1)")
+        raise ValueError(f"actuated_swing {actuated_swing:g} s with {params.name}: planned, not walked (its walk's errors "
+                         "grow from step to step and it falls in the seventh; docs/model.md 15.1)")
 
 
 class NoPlan(RuntimeError):
