@@ -251,12 +251,11 @@ class SimulatorNode(Node):
         self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
         check_initial_state(value["initial_state"], value["engine"])
-        check_held_phases(value["double_support"], value["actuated_swing"], value["engine"],
-                          load_params(value["params"] or None))
+        params = load_params(value["params"] or None)
+        check_held_phases(value["double_support"], value["actuated_swing"], value["engine"], params)
         prepare_walking()  # what the walk loads once, now rather than when it starts
         gait = {name: value[name] for name in GAIT_NAMES}
         try:
-            params = load_params(value["params"] or None)
             validate_request(GaitRequest(**resolve_unset({**gait, "params": ""})), params)
         except ValueError as exc:
             raise ValueError(f"{exc} (the requested plan's parameters: SI units, angles in rad here; the biped-gait "
@@ -268,7 +267,7 @@ class SimulatorNode(Node):
         self.steps = value["steps"]
         self._standing = value["initial_state"] == "standing"
         self._own_params = value["params"]
-        self._own_set = load_params(self._own_params) if self._own_params else None
+        self._own_set = params if self._own_params else None
         self._group = ReentrantCallbackGroup()
         self._latest_plan: GaitPlan | None = None
         self._plan_ready = threading.Event()
