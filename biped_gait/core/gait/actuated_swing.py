@@ -396,12 +396,12 @@ class ActuatedSwingPlanner:
         weight[2] = bm.total_mass * bm.params.gravity / 2
         if lasts:
             x, xd, xdd, torques = seed.x[:, at], seed.xd[:, at], seed.xdd[:, at], seed.torques
+            forces = seed.contact_forces[:, 1]
+            if seed.spin_moments is not None:  # lateral hips: the new tip's reaction holds its spin moment
+                forces = np.concatenate([forces, seed.spin_moments[0][:, 1:2]], axis=1)
             values.update(q=list(x[0::2]), v=list(xd[0::2]), a=list(xdd[0::2]), a_mid=list(xdd[1::2]),
                           tau=list(torques[0::2]), tau_mid=list(torques[1::2]),
-                          f_new=list(seed.contact_forces[0::2, 1]), f_new_mid=list(seed.contact_forces[1::2, 1]))
-            if seed.spin_moments is not None:  # lateral hips: the new tip's reaction holds its spin moment
-                forces = np.concatenate([seed.contact_forces[:, 1], seed.spin_moments[0][:, 1:2]], axis=1)
-                values.update(f_new=list(forces[0::2]), f_new_mid=list(forces[1::2]))
+                          f_new=list(forces[0::2]), f_new_mid=list(forces[1::2]))
         else:
             values.update(q=[boundary.q_t] * 2, v=[held["xd_held"][at]] * 2, f_new=[weight] * 2, f_new_mid=[weight])
         return values
