@@ -679,13 +679,11 @@ class LastingProgram:
         return self._support(duration, stats, out, elapsed, solution)
 
     def _support(self, duration: float, stats: dict, out: dict, elapsed: float, solution: dict) -> LastingSupport:
-        n_points = 2 * self.intervals + 1 if self.intervals > 0 else 0
         embed = self._embed_array
-        if n_points:
-            t = np.linspace(0.0, duration, n_points)
+        if self.intervals > 0:
+            t, weights = self._grid(duration)
             x, xd, xdd = embed(out["q"]), embed(out["v"]), embed(out["a"])
             tau = out["tau"]
-            weights = np.array([1.0] + [4.0, 2.0] * (self.intervals - 1) + [4.0, 1.0]) * (duration / self.intervals) / 6
             l1 = float(weights @ np.abs(tau).sum(axis=1))
             l2 = float(weights @ (tau ** 2).sum(axis=1))
         else:
@@ -706,6 +704,13 @@ class LastingProgram:
         return LastingSupport(duration, success, message, t, x, xd, xdd, tau, forces, i_minus, i_plus, held, l1,
                               l2, total, int(stats["iter_count"]), elapsed, next_start, push_off, solution,
                               spin_moments)
+
+    def _grid(self, duration: float) -> tuple[np.ndarray, np.ndarray]:
+        """The phase's points (s: nodes and midpoints in time order) and the weights (s) of the
+        effort's integral over them (Simpson's rule, the collocation's own)."""
+        t = np.linspace(0.0, duration, 2 * self.intervals + 1)
+        weights = np.array([1.0] + [4.0, 2.0] * (self.intervals - 1) + [4.0, 1.0]) * (duration / self.intervals) / 6
+        return t, weights
 
     def _reactions(self, out: dict) -> tuple[np.ndarray, np.ndarray, tuple | None]:
         """The phase's reactions from the program's outputs ``f_old``, ``f_new`` (at the points) and

@@ -104,9 +104,6 @@ class SplineMesh:
         spline = BSpline(self.knots, np.eye(self.control_points), DEGREE)
         return (spline.derivative(derivative) if derivative else spline)(np.asarray(points, dtype=float))
 
-    def curve(self, control: np.ndarray) -> BSpline:
-        """The spline of ``control`` (control_points x nq) over s."""
-        return BSpline(self.knots, control, DEGREE)
 
 
 def spline_mesh(duration: float, end_roll: float = END_ROLL) -> SplineMesh:
@@ -155,15 +152,8 @@ class SplineStopProgram(LastingProgram):
         n = mesh.control_points
         control = ca.reshape(nlp.var("P", n * nq, np.tile(lower, n), np.tile(upper, n)), nq, n).T
         q_s, v_s, a_s = (ca.mtimes(ca.DM(mesh.basis(mesh.samples, k)), control) for k in range(3))
-        first = [ca.mtimes(ca.DM(mesh.basis([0.0], k)), control).T for k in range(2)]
-        last = [ca.mtimes(ca.DM(mesh.basis([1.0], k)), control).T for k in range(3)]
-        nlp.eq(first[0] - q_first, "the first posture")
-        nlp.eq(first[1] / p_d - v_first, "the first velocity")
-        nlp.eq(last[0] - q_last, "the last posture")
-        nlp.eq(ca.vertcat(last[1], last[2]), "at rest")
-        q_c = ca.mtimes(ca.DM(mesh.basis(mesh.closure)), control)
-        for j in range(len(mesh.closure)):
-            nlp.eq(self.f_tip(self._embed(q_c[j, :].T))[0][rows] - tip_t[rows], "the new tip held")
+        for row, what in _kinematic_rows(self, control, p_d, (q_first, v_first, q_last), tip_t[rows]):
+            nlp.eq(row, what)
         weights = _trapezoid(mesh.samples)
         out = []
         for j in range(len(mesh.samples)):
@@ -183,19 +173,9 @@ class SplineStopProgram(LastingProgram):
             out.append((q, v, a, tau, f1, f2))
         return out
 
-    def _support(self, duration, stats, out, elapsed, solution) -> LastingSupport:
-        embed, tau = self._embed_array, out["tau"]
-        weights = _trapezoid(self.mesh.samples) * duration
-        forces, held, spin = self._reactions(out)
-        i_minus = out["i_minus"].ravel()
-        l1 = float(weights @ np.abs(tau).sum(axis=1))
-        success = bool(stats["success"])
-        message = "solved" if success else (f"no stop of {duration:g} s on the spline: IPOPT "
-                                            f"{stats['return_status']}; {self._worst(solution)}")
-        return LastingSupport(duration, success, message, self.mesh.samples * duration, embed(out["q"]),
-                              embed(out["v"]), embed(out["a"]), tau, forces, i_minus, np.zeros(self.na), held, l1,
-                              float(weights @ (tau ** 2).sum(axis=1)), float(np.abs(i_minus).sum() + l1),
-                              int(stats["iter_count"]), elapsed, None, None, solution, spin)
+    def _grid(self, duration: float) -> tuple[np.ndarray, np.ndarray]:
+        """The samples (s) and the trapezoidal rule's weights (s) of the effort over them."""
+        return self.mesh.samples * duration, _trapezoid(self.mesh.samples) * duration
 
     def solve_stage(self, boundary: Boundary, stage: Stage, x0: np.ndarray) -> LastingSupport:
         """The stop between ``boundary``'s ends at ``stage``'s margins, IPOPT started at ``x0``
@@ -209,6 +189,25 @@ class SplineStopProgram(LastingProgram):
         out = dict(zip(self.outputs.name_out(), (np.array(v) for v in self.outputs(result["x"], params))))
         solution = {key: np.array(result[key]).ravel() for key in ("x", "lam_x", "lam_g", "g")}
         return self._support(self.mesh.duration, stats, out, elapsed, solution)
+
+
+def _kinematic_rows(program: SplineStopProgram, control, duration, ends: tuple, tip) -> list[tuple]:
+    """The rows on the spline's control points alone, each with what it says: the first posture
+    and velocity, the last posture, at rest there (velocity and acceleration), the new tip at
+    ``tip`` (its held rows) at the closure points. ``control``: control_points x nq (CasADi);
+    ``duration`` (s, a number or a symbol); ``ends``: the first posture and velocity, the last posture."""
+    mesh = program.mesh
+    q_first, v_first, q_last = ends
+
+    def at(points, derivative=0):
+        return ca.mtimes(ca.DM(mesh.basis(points, derivative)), control)
+
+    rows = [(at([0.0]).T - q_first, "the first posture"), (at([0.0], 1).T / duration - v_first, "the first velocity"),
+            (at([1.0]).T - q_last, "the last posture"), (ca.vertcat(at([1.0], 1).T, at([1.0], 2).T), "at rest")]
+    closure = at(mesh.closure)
+    rows += [(program.f_tip(program._embed(closure[j, :].T))[0][program.rows] - tip, "the new tip held")
+             for j in range(len(mesh.closure))]
+    return rows
 
 
 def _trapezoid(points: np.ndarray) -> np.ndarray:
@@ -233,12 +232,8 @@ def seed(program: SplineStopProgram, boundary: Boundary, impulsive: dict[str, np
     acceleration = ca.mtimes(ca.DM(mesh.basis(mesh.samples, 2)), control) / d ** 2
     objective = ca.sum1(ca.DM(_trapezoid(mesh.samples) * d) * ca.sum2(acceleration ** 2))
     tip = program.f_tip(program._embed(ca.DM(boundary.q_t)))[0][program.rows]
-    q_c = ca.mtimes(ca.DM(mesh.basis(mesh.closure)), control)
-    rows = [ca.mtimes(ca.DM(mesh.basis([0.0])), control).T - boundary.q_t,
-            ca.mtimes(ca.DM(mesh.basis([0.0], 1)), control).T / d - impulsive["xd_held"][at],
-            ca.mtimes(ca.DM(mesh.basis([1.0])), control).T - boundary.q_rest,
-            ca.mtimes(ca.DM(mesh.basis([1.0], 1)), control).T, ca.mtimes(ca.DM(mesh.basis([1.0], 2)), control).T]
-    rows += [program.f_tip(program._embed(q_c[j, :].T))[0][program.rows] - tip for j in range(len(mesh.closure))]
+    ends = (boundary.q_t, impulsive["xd_held"][at], boundary.q_rest)
+    rows = [row for row, _ in _kinematic_rows(program, control, d, ends, tip)]
     lower, upper = program._ranges()
     kinematic = ca.nlpsol("least_acceleration", "ipopt", {"x": p, "f": objective, "g": ca.vertcat(*rows)},
                           {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"})
