@@ -87,10 +87,10 @@ def test_interrupted_sweep_keeps_what_it_computed(tmp_path):
     proc = subprocess.Popen([ENTRY, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True, preexec_fn=_sigint_as_in_a_terminal)
     try:
-        deadline = time.monotonic() + 200  # the first chain of gaits, on a busy machine too
-        while time.monotonic() < deadline and proc.poll() is None:
-            if (out / "sweep.csv").exists() and len((out / "sweep.csv").read_text().splitlines()) > 1:
-                break
+        deadline = time.monotonic() + 200  # the first chain of gaits (3 s here), on a busy machine too
+        written = False
+        while time.monotonic() < deadline and proc.poll() is None and not written:
+            written = (out / "sweep.csv").exists() and len((out / "sweep.csv").read_text().splitlines()) > 1
             time.sleep(0.05)
         assert proc.poll() is None, "the sweep ended before it could be interrupted"
         os.killpg(proc.pid, signal.SIGINT)
@@ -98,6 +98,7 @@ def test_interrupted_sweep_keeps_what_it_computed(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+    assert written, f"no chain of gaits written within 200 s: {stderr}"
     assert proc.returncode == 130, stderr
     match = re.search(r"interrupted: (\d+) of 532 gaits kept in", stderr)
     assert match, stderr

@@ -4,10 +4,17 @@ the ``concurrent.futures.Executor`` interface, and the one planner each worker t
 Work is sent as plain picklable arguments (``BipedParams``, floats, strings); each worker
 thread builds a ``GaitPlanner`` for a parameter set the first time it sees it and reuses it
 (Pinocchio data are not thread-safe, so never shared between threads).
+
+Local workers are forked from a server process (``forkserver``, Python 3.14's default on Linux)
+that has imported the planner and started no thread, never from the command itself: a process
+forked from one with threads (the executor's own, tqdm's monitor, the linear algebra's) can inherit
+a lock held by one of them and wait on it forever, and did (a CI run's sweep, both workers idle for
+200 s, at b387fa8).
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import signal
 import sys
@@ -83,7 +90,9 @@ def open_executor(workers: int | None = None, scheduler: str | None = None) -> I
             executor.shutdown(wait=False)
             client.close()
     else:
-        pool = ProcessPoolExecutor(max_workers=check_workers(workers), initializer=_ignore_sigint)
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload([__name__])  # the planner imported once, in the server
+        pool = ProcessPoolExecutor(max_workers=check_workers(workers), mp_context=context, initializer=_ignore_sigint)
         try:
             yield pool
         finally:
