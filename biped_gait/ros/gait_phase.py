@@ -1,7 +1,7 @@
 """The simulator's gait phase topic (biped_gait_interfaces/GaitPhase, after the convention of
 biped_interfaces/Phase): published when a phase begins, i.e. at the first sample of a step's
-phase (the stance foot of a single support, both feet of a double support that lasts, ``STANDING``
-while the robot stands: once, at its first sample) and at each touchdown (the instantaneous double
+phase (the stance foot of a single support, both feet of a double support that lasts, ``STOPPING``
+while a stop brings the walk to rest, ``STANDING`` while the robot stands: once, at its first sample) and at each touchdown (the instantaneous double
 support). The topic is transient local, depth 1 (``qos.LATCHED``): a subscriber that joins
 later, with that durability, receives the current phase at once. No physics here."""
 
@@ -11,7 +11,7 @@ from std_msgs.msg import Header
 
 from biped_gait_interfaces.msg import GaitPhase
 
-from ..core.walking.events import SINGLE_SUPPORT, STANDING
+from ..core.walking.events import SINGLE_SUPPORT, STANDING, STOPPING
 from ..core.walking.world import WORLD_FRAME
 from .walk_messages import stamp_msg
 
@@ -34,7 +34,7 @@ class GaitPhases:
         """A sample of ``step`` at ``t`` (s in the walk), of a phase of ``kind``
         (``events.PHASE_KINDS``): that phase begins if it is its first."""
         phase = (STANCE[stance_side] if kind == SINGLE_SUPPORT else GaitPhase.STANDING if kind == STANDING
-                 else GaitPhase.DOUBLE_STANCE)
+                 else GaitPhase.STOPPING if kind == STOPPING else GaitPhase.DOUBLE_STANCE)
         if (step, phase) != self._phase:
             self._phase = (step, phase)
             self._publish(phase, step, t, start_ns)
@@ -42,8 +42,8 @@ class GaitPhases:
     def touchdown(self, step: int, t: float, start_ns: int) -> None:
         """``step`` ends at ``t`` (s in the walk) with the double support: it begins then (the
         paper's, instantaneous), unless its samples began it already (one that lasts, whose
-        touchdown event comes at its lift-off)."""
-        if self._phase != (step, GaitPhase.DOUBLE_STANCE):
+        touchdown event comes at its lift-off, or a stop, at its end)."""
+        if self._phase not in ((step, GaitPhase.DOUBLE_STANCE), (step, GaitPhase.STOPPING)):
             self._phase = (step, GaitPhase.DOUBLE_STANCE)
             self._publish(GaitPhase.DOUBLE_STANCE, step, t, start_ns)
 

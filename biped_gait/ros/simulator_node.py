@@ -33,11 +33,14 @@ Standing, starting and stopping: with ``initial_state`` ``standing`` the robot s
 both feet down, held by the core's balance controller (``core/walking/phases/standing.py``; in
 MuJoCo by its own contacts with friction), for ``stand_duration`` s (0: until stopped), publishing and recording as a
 walk does (``/gait_phase`` ``STANDING``, ``/odom`` at rest); pushes act on it with both feet held.
-A ``/cmd_vel`` that is not 0 asks it to start onto the plan's gait, and ``/cmd_vel`` linear.x 0
-asks a walk to stop: the core refuses both for the shipped parameter sets with the physical
-reason (``start_stop``, docs/model.md section 8.10), which the node logs once: the robot stands
-on, or walks on at the slowest gait. No ``/cmd_vel`` for ``cmd_vel_timeout`` s of simulated time
-counts as a command of 0 (``speed_command``).
+A ``/cmd_vel`` that is not 0 asks it to start onto the plan's gait, which the core refuses with
+the physical reason (``start_stop``, docs/model.md section 8.10), logged once: the robot stands on.
+``/cmd_vel`` linear.x 0 asks a walk to stop: the hybrid engine's walk of the gait the package keeps
+a stop of (the default parameter set's default gait) stops at the next touchdown on that gait
+(``/gait_phase`` ``STOPPING``, 2 s with both feet down) and stands (``STANDING``, for
+``stand_duration`` s from then, 0: until stopped; docs/model.md section 14.2); other walks are
+refused with the reason and walk on at the slowest gait. No ``/cmd_vel`` for ``cmd_vel_timeout``
+s of simulated time counts as a command of 0 (``speed_command``).
 
 Pushes: the ``~/push`` service and the ``pushes`` parameter (``push_service``); the walker
 recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: ``engine``
@@ -185,8 +188,9 @@ PARAMETERS = (
           "a step) or 'standing' (at rest, both feet down, held by the balance controller for stand_duration, "
           "in either engine). A standing robot cannot start yet: /cmd_vel is refused with the physical reason "
           "(docs/model.md section 8.10)", choices=INITIAL_STATES),
-    Param("stand_duration", 0.0, "with initial_state 'standing': how long the robot stands (s of simulated time, "
-          "to the next 0.1 s); 0: until stopped. steps counts the steps of a walk", 0.0, 1e6),
+    Param("stand_duration", 0.0, "with initial_state 'standing', or after a walk's stop (/cmd_vel 0): how long the "
+          "robot stands (s of simulated time, to the next 0.1 s); 0: until stopped. steps counts the steps of a walk",
+          0.0, 1e6),
     Param("pushes", "", f"scripted pushes on the trunk: {SCRIPT_FORMAT} (step index, phase as a fraction of T in "
           "[0, 1), impulse in N s, world axes); also the ~/push service"),
     Param("speed_rule", SPEED_RULES[0], "how /cmd_vel speeds pick gaits: 'least_effort' (least W per metre among "
@@ -199,7 +203,7 @@ PARAMETERS = (
           0.001, 2.0),
     Param("cmd_vel_timeout", 0.5, "once a /cmd_vel came, no /cmd_vel for this long counts as a command of 0 (s of "
           "simulated time, taken before the next step; 0: never, a real value here, as in diff_drive_controller). "
-          "0 m/s asks for a stop, not possible yet: the walk goes on at the slowest gait", 0.0, 3600.0),
+          "0 m/s asks for a stop (the robot stands, where a stop is kept; else it walks on at the slowest gait)", 0.0, 3600.0),
     Param("record", True, "record everything published but /clock to MCAP (true/false; at run time: false "
           "finishes the recording, true starts a new one, the latched topics first)", dynamic=True),
     Param("record_dir", topics.RECORD_DIR, "directory of the recordings (path)"),
@@ -613,7 +617,8 @@ class SimulatorNode(Node):
         base_ns = start_ns + round(offset * 1e9)  # the walk's t = 0
         if walk.walker is not None:
             if orbit[0].double_support is None:
-                self.speed.start(walk.walker, orbit[0].params or None, base_ns, walk.standing)
+                stoppable = self.value["engine"] == "hybrid" and orbit[0].swing_ends is None
+                self.speed.start(walk.walker, orbit[0].params or None, base_ns, walk.standing, stoppable)
             else:
                 self.get_logger().info("speed command: /cmd_vel is not followed while the walk tracks a double support "
                                        "that lasts: its lift-off posture is far from any other gait's start, whose "

@@ -12,11 +12,17 @@ command changes), which is published on ``~/velocity_envelope`` (transient local
 starts. linear.y (no sideways gaits), linear.z, angular.x and angular.y are ignored (a warning
 once).
 
-linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop: the command is walked as the
-slowest gait of the envelope, and once the walk is there (straight, at its command) the core plans
-the stop step from that gait, the one that walks (``start_stop.plan_stop``, in a thread of its
-own, once per gait and walk) and says why it cannot be made (for the shipped parameter sets it
-cannot: docs/model.md section 8.10).
+linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop. **Where a stop is kept** (the
+hybrid engine's walk of the default parameter set, started on the gait the package keeps a stop
+of, ``core/walking/stop.py``, made ready in a thread when the walk starts): the walk stops at the
+touchdown of the next step that aims at that gait (``Walker.stop``: the stop's 2 s of double
+support, then standing, docs/model.md section 14.2); from another gait it is first walked back to
+that gait's speed, then aimed at the gait itself (one transition step). Then the robot stands and
+commands are refused as while standing. **Elsewhere** the command is walked as the slowest gait of
+the envelope, and once the walk is there (straight, at its command) the core plans the stop step
+from that gait, the one that walks (``start_stop.plan_stop``, in a thread of its own, once per gait
+and walk) and says why it cannot be made (for the shipped parameter sets it cannot: docs/model.md
+section 8.10).
 
 **The walk's end** (a fall, its steps made: ``end``): commands are no longer walked and nothing
 more is said of them, a start or stop still being planned included: the fall's message is the
@@ -28,8 +34,7 @@ thread, once) and refuses with its physical reason, logged once: the robot stand
 
 **Timeout** (as ros2_control's diff_drive_controller ``cmd_vel_timeout``): once a command came,
 no /cmd_vel for ``timeout`` s of simulated time counts as a command of 0, taken before the next
-step (so within the timeout and a step); logged once per lapse. 0 m/s asks for a stop, which is
-refused: the walk goes on at the slowest gait. ``timeout`` 0: never. A paced walk (real-time
+step (so within the timeout and a step); logged once per lapse. 0 m/s asks for a stop (above). ``timeout`` 0: never. A paced walk (real-time
 factor f > 0) that lags behind the wall clock catches up in a burst of simulated time: the
 silence counted is then at most f times the wall time since the command, so that a publisher
 that kept its rate is not timed out by the burst.
@@ -50,9 +55,10 @@ from std_msgs.msg import Header
 from ..core.dynamics.hybrid import HybridStep
 from ..core.dynamics.settings import DEFAULTS
 from ..core.model.biped import BipedModel
-from ..core.model.params import BipedParams
+from ..core.model.params import BipedParams, load_params
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
+from ..core.walking.stop import WalkStop, kept_stop
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.runner import Walker
@@ -86,6 +92,9 @@ class SpeedCommand:
         self._said_ignored: set[str] = set()
         self._explained: set[tuple[str, float, float]] = set()  # the walk's starts and stops planned: (kind, L, T)
         self._stop_asked = False  # the last command asks the walk to stop
+        self._stop: WalkStop | None = None  # the kept stop of the walk's gait, once made ready (start)
+        self._stop_gait: PlannedOrbit | None = None  # the gait it stops from: the walk's first
+        self._stop_home = False  # the follower has been sent back to the stop's gait's speed
         self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
         self._ended = False  # the walk ended: commands are ignored until the next starts
         self._grid = DEFAULTS.walk_steps
@@ -98,14 +107,19 @@ class SpeedCommand:
         follower = self.follower
         return follower.commanded if follower is not None else None
 
-    def start(self, walker: Walker, source: str | None, stamp_ns: int, standing: bool = False) -> None:
+    def start(self, walker: Walker, source: str | None, stamp_ns: int, standing: bool = False,
+              stoppable: bool = False) -> None:
         """Make the follower of ``walker``'s gait (``source``: its parameter set as given), and
         publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time); with
-        ``standing``, the walker stands: commands are refused (module docstring)."""
-        self._last, self._lapsed, self._stop_asked = None, False, False
+        ``standing``, the walker stands: commands are refused; ``stoppable``: the walk can take a
+        kept stop (the hybrid engine's paper walk), made ready in a thread (module docstring)."""
+        self._last, self._lapsed, self._stop_asked, self._stop_home = None, False, False, False
         with self._lock:
             self._walk, self._ended = self._walk + 1, False
             self._explained.clear()
+            self._stop, self._stop_gait = None, None
+        if stoppable and not standing:
+            self._prepare_stop(walker.orbit, source)
         if standing:
             with self._lock:
                 self.follower, self._standing, pending = None, walker, self._pending
@@ -134,6 +148,24 @@ class SpeedCommand:
         with self._lock:
             self.follower, self._standing, self._pending = None, None, None
             self._walk, self._ended = self._walk + 1, True
+
+    def _prepare_stop(self, gait: PlannedOrbit, source: str | None) -> None:
+        """The kept stop of ``gait``, made ready in a thread on a model of its own (Pinocchio's data
+        are the walk thread's); none if the package keeps no stop of that gait."""
+        walk = self._walk
+
+        def prepare() -> None:
+            try:
+                stop = kept_stop(HybridStep(BipedModel.from_params(load_params(source))))
+            except ValueError:  # no stop kept for these parameters
+                return
+            if stop.why_not(gait):
+                return
+            with self._lock:
+                if self._walk == walk:
+                    self._stop, self._stop_gait = stop, gait
+
+        threading.Thread(target=prepare, name="stop-prepare", daemon=True).start()
 
     def on_twist(self, msg: Twist) -> None:
         """A /cmd_vel message: linear.x the commanded speed (m/s), angular.z the yaw rate (rad/s);
@@ -170,6 +202,9 @@ class SpeedCommand:
         if follower is None:  # the walk ended meanwhile
             return
         self._stop_asked = speed < STOP_SPEED  # said from the gait that walks once it is there (before_step)
+        self._stop_home = False
+        if self._stop_asked and self._stop is not None:  # walked to the stop's gait (before_step)
+            return
         if yaw_rate and follower.envelope.max_curvature == 0.0 and "angular.z" not in self._said_ignored:
             self._said_ignored.add("angular.z")
             self.node.get_logger().warn("speed command: angular.z ignored: the model walks straight (turning needs "
@@ -220,8 +255,10 @@ class SpeedCommand:
         if lapsed:
             self.node.get_logger().warn(
                 f"speed command: no /cmd_vel for {silent:.3f} s of simulated time (cmd_vel_timeout {self.timeout:g} s): "
-                "taken as 0 m/s; stopping is not possible yet, so the walk goes on at the slowest gait")
+                "taken as 0 m/s, a stop")
             self._command(0.0, 0.0)
+        if self._stop_asked and self._stop is not None and self._stopped(walker, follower):
+            return
         transition = follower.before_step(walker)
         if transition is not None and transition.failure:
             self.node.get_logger().warn(f"speed command: no transition before step {transition.step}: "
@@ -230,6 +267,38 @@ class SpeedCommand:
                 follower.speed - follower.commanded) < 1e-9:  # at the slowest gait, straight: the gait that walks
             self._explain("stop", follower.orbit, follower.bm.params, "speed command: cannot stop from",
                           "walking on at the slowest gait")
+
+
+    def _stopped(self, walker: Walker, follower: SpeedFollower) -> bool:
+        """Towards the kept stop (module docstring): stop at this step's touchdown if it aims at the
+        stop's gait; else back to that gait's speed, then aimed at the gait. True if the follower is
+        not to act before this step."""
+        stop, gait, logger = self._stop, self._stop_gait, self.node.get_logger()
+        if not stop.why_not(walker.orbit) and walker.state.aim.pending is None:
+            try:
+                walker.stop(stop)
+            except ValueError as exc:
+                logger.warn(f"speed command: {exc}; walking on")
+                self._stop = None
+                return False
+            logger.info(f"speed command: 0 m/s: stopping at the touchdown of step {walker.state.step} (the kept stop "
+                        f"of the gait L = {stop.step_length:g} m, T = {stop.period:g} s: {stop.plan.duration:g} s with "
+                        "both feet down), then standing")
+            with self._lock:
+                self.follower, self._standing = None, walker
+            return True
+        home = gait.step_length / gait.period
+        if not self._stop_home:
+            self._stop_home = True
+            follower.command(home, 0.0)
+            logger.info(f"speed command: 0 m/s: walking back to {home:.3f} m/s, the speed of the gait the stop is kept "
+                        "for, to stop from it")
+            return False
+        at_home = follower.curvature == 0.0 and abs(follower.speed - home) < 1e-9
+        if at_home and walker.state.aim.pending is None:
+            walker.retarget(gait)  # the last transition: onto the stop's gait itself
+            return True
+        return False
 
 
 def envelope_msg(envelope: Envelope, rule: str, stamp) -> VelocityEnvelope:

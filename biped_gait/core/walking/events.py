@@ -18,9 +18,10 @@ from .world import WorldPictures, WorldState
 SINGLE_SUPPORT = "single_support"
 DOUBLE_SUPPORT = "double_support"
 STANDING = "standing"
-PHASE_KINDS = (SINGLE_SUPPORT, DOUBLE_SUPPORT, STANDING)
+STOPPING = "stopping"
+PHASE_KINDS = (SINGLE_SUPPORT, DOUBLE_SUPPORT, STANDING, STOPPING)
 """What a phase is to a user (the gait phase topic): one foot on the ground, both while the robot
-walks, both while it stands."""
+walks, both while it stands, both while it comes to rest from a walk."""
 
 
 class Fall(Exception):

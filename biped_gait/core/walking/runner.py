@@ -37,8 +37,11 @@ from .feedback import Feedback
 from .orbit import Cycle, PlannedOrbit, as_cycle
 from .phases.impulsive import SingleSupport
 from .phases.phase import AFTER, AT, TIME_TOLERANCE, TOUCHDOWN, End, Phase, WalkContext
+from .phases.standing import Standing
+from .phases.stopping import StopTouchdown
 from .push import AppliedPush, Push, TrunkPush
 from .state import WalkState
+from .stop import WalkStop
 
 LINKS_CHECKED_AFTER = 0.05  # of the aimed period: a link below the ground is a fall from then on (not at the toe-off)
 SLIP_LIMIT = LIFT_LIMIT = 1e-3
@@ -136,6 +139,20 @@ class Walker:
         if not all(o.converged for o in cycle):
             raise ValueError("cannot walk a plan that did not converge")
         self.state = replace(self.state, aim=self.state.aim.retargeted(cycle))
+
+    def stop(self, stop: WalkStop) -> None:
+        """End the walk standing: the current step's touchdown goes onto ``stop``'s double support
+        and from its end the robot stands (``phases.stopping``). ``ValueError`` with the reason if
+        the current step cannot: it is under way or not a ballistic single support (the MuJoCo
+        walk's), it aims at another gait than the stop's, or another gait is to be aimed at next."""
+        phase, aim = self.phase, self.state.aim
+        if type(phase) is not SingleSupport or self.state.t_step > 0.0:
+            raise ValueError("a stop begins with a step of the hybrid engine's ballistic walk, before it starts")
+        why = stop.why_not(aim.orbit) or ("the walk is aimed at another gait from this step's touchdown"
+                                          if aim.pending is not None else "")
+        if why:
+            raise ValueError(f"cannot stop at this step: {why}")
+        self.phase = SingleSupport(StopTouchdown(stop.plan, Standing(stop.balance)))
 
     def shove(self, delta_qd: np.ndarray) -> None:
         """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current phase starts with."""

@@ -48,7 +48,7 @@ from .balance import FD_STEP, TORQUE_SCALE, effort_limits, linearization
 from .held_support import held_support
 from .orbit import PlannedOrbit
 from .phases.pulse_dynamics import PinnedTip, friction_ratio
-from .tracking import POSITION_SCALE, RATE_SCALE, RESOLUTION_STEP, Tracking
+from .tracking import POSITION_SCALE, RATE_SCALE, RESOLUTION_STEP, Tracking, riccati_gains
 
 # The touchdown's state in the swing's LQR (its terminal weight, Bryson's). Measured on the walkable
 # plan at the default gait (docs/model.md 15.1): (0.001 rad, 0.01 rad/s) walks two steps, (0.01, 0.1)
@@ -127,19 +127,13 @@ def single_support_gains(pinned: PinnedTip, start: Tracking, end: Tracking, flig
             plan = start if t <= tau else end
             q, qd, torque = plan.reference(t if t <= tau else t - (period - tau))
             a, b = linearization(pinned, q, qd, torque, identity)
-        steps.append((np.eye(2 * n) + h * a + h * h / 2 * a @ a, h * b + h * h / 2 * a @ b))
-    weight = h * np.diag(np.concatenate([np.full(n, POSITION_SCALE ** -2.0), np.full(n, RATE_SCALE ** -2.0)]))
-    effort = h * np.diag((TORQUE_SCALE * limits) ** -2.0)
+        steps.append((np.eye(2 * n) + h * a + h * h / 2 * a @ a, h * b + h * h / 2 * a @ b, h))
+    weight = np.diag(np.concatenate([np.full(n, POSITION_SCALE ** -2.0), np.full(n, RATE_SCALE ** -2.0)]))
+    effort = np.diag((TORQUE_SCALE * limits) ** -2.0)
     cost = np.diag(np.concatenate([np.full(n, TOUCHDOWN_POSITION ** -2.0), np.full(n, TOUCHDOWN_RATE ** -2.0)]))
     tip = touchdown_tip(pinned.bm, *end.reference(end.duration)[:2])
     cost = cost + tip.T @ np.diag(np.array([TIP_HEIGHT, TIP_SPEED, TIP_SPEED, TIP_SPEED]) ** -2.0) @ tip
-    gains = []
-    for a, b in reversed(steps):
-        gain = np.linalg.solve(effort + b.T @ cost @ b, b.T @ cost @ a)
-        cost = weight + a.T @ cost @ (a - b @ gain)
-        cost = (cost + cost.T) / 2
-        gains.append(gain)
-    return np.array(gains[::-1])
+    return riccati_gains(steps, weight, effort, cost)
 
 
 @dataclass(frozen=True, eq=False)

@@ -67,7 +67,9 @@ class Walk:
     (s) the MuJoCo walk's double support (``phases.pulses``); ``initial_state``: one of
     ``INITIAL_STATES`` (``standing``: the walk stands for ``stand_duration`` s of simulated time,
     to the end of the standing phase that reaches it, 0 meaning never; ``steps`` is not used, a
-    standing robot making none).
+    standing robot making none). A walk that ``before_step`` stops (``Walker.stop``) stands from the
+    stop's end for ``stand_duration`` s, or for ever; ``before_step`` is called before each standing
+    phase as before each step.
     """
 
     def __init__(self, orbit: PlannedOrbit | Cycle, rate: float, steps: int = 0, reaim: bool = True,
@@ -144,7 +146,7 @@ class Walk:
             return
         walker, prepared, last = self.walker, None, 0.0
         while not self._done(walker):
-            if self.before_step is not None and (self.standing or walker.state.step != prepared):  # a step begins
+            if self.before_step is not None and (isinstance(walker.phase, Standing) or walker.state.step != prepared):
                 prepared = walker.state.step
                 self.before_step(walker)
             s = walker.state
@@ -158,9 +160,10 @@ class Walk:
         yield Finished(walker.state.step, walker.state.t + walker.state.t_step, walker.state.stance_side)
 
     def _done(self, walker: Walker) -> bool:
-        """Whether the walk has made its steps, or stood its duration."""
-        if self.standing:
-            return 0 < self.stand_duration <= walker.state.t + walker.state.t_step + 1e-9
+        """Whether the walk has made its steps, or stood its duration (from its start, or from the
+        end of its stop)."""
+        if isinstance(walker.phase, Standing):
+            return 0 < self.stand_duration <= walker.state.t_step + 1e-9
         return 0 < self.steps <= walker.state.step
 
     def _split(self, samples: list[Sample], pushes: tuple[AppliedPush, ...],

@@ -1,0 +1,70 @@
+"""The walk's stop, ready to walk (docs/model.md section 14.2): a stop planned from a gait's
+touchdown into the standing posture (``core/gait/spline_stop.py``; the package keeps the default
+gait's, ``kept_stop_path``), with what the walk needs of it: the plan to track
+(``held_support.HeldSupport``, its feedback the finite-horizon LQR's, ``tracking.with_horizon``) and the balance controller that holds the posture it ends in
+(``balance``). ``Walker.stop`` walks it at the touchdown of a step aimed at its gait
+(``phases.stopping``).
+
+Units SI, rad.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..dynamics.closed_chain import ClosedChain
+from ..dynamics.hybrid import HybridStep
+from ..gait.spline_stop import kept_stop_path, load_stop
+from ..model.params import BipedParams, load_params
+from .balance import Balance, balance, standing_pose
+from .held_support import HeldSupport, held_support
+from .orbit import PlannedOrbit
+from .tracking import with_horizon
+
+SAME_GAIT = 1e-9  # m, s, rad: a gait this close to the stop's in L, T and alpha is the stop's (they are stored to 1e-16)
+
+
+@dataclass(frozen=True, eq=False)
+class WalkStop:
+    """A stop from the gait (``params``, ``step_length`` m, ``period`` s, ``arm_amplitude`` rad,
+    ``mode``) into standing: the ``plan`` to track from the gait's touchdown and the ``balance`` that
+    holds the posture it ends in."""
+
+    params: BipedParams
+    step_length: float
+    period: float
+    arm_amplitude: float
+    mode: str
+    plan: HeldSupport
+    balance: Balance
+
+    def why_not(self, orbit: PlannedOrbit) -> str:
+        """Why a step aimed at ``orbit`` cannot end in this stop ('' if it can)."""
+        if orbit.double_support is not None or orbit.swing_ends is not None:
+            return "the stop is planned from the paper's impulsive gait, not from one with a double support that lasts"
+        if not math.isinf(orbit.turn_radius):
+            return "the stop is planned from a straight gait"
+        same = (load_params(orbit.params or None) == self.params and orbit.mode == self.mode
+                and all(abs(a - b) <= SAME_GAIT for a, b in ((orbit.step_length, self.step_length),
+                                                              (orbit.period, self.period),
+                                                              (orbit.arm_amplitude, self.arm_amplitude))))
+        if same:
+            return ""
+        return (f"the stop is planned from the gait L = {self.step_length:g} m, T = {self.period:g} s, alpha = "
+                f"{math.degrees(self.arm_amplitude):.4g} deg, {self.mode} ({self.params.name}), not from L = "
+                f"{orbit.step_length:g} m, T = {orbit.period:g} s, alpha = {math.degrees(orbit.arm_amplitude):.4g} deg, "
+                f"{orbit.mode}")
+
+
+def kept_stop(hybrid: HybridStep) -> WalkStop:
+    """The package's kept stop (``kept_stop_path``) for the model of ``hybrid``: ``ValueError`` if
+    the model is not of the parameter set it was planned for."""
+    with_params = load_params(None)
+    if hybrid.bm.params != with_params:
+        raise ValueError(f"a stop is kept for the parameter set {with_params.name} only, not for {hybrid.bm.params.name}")
+    chain = ClosedChain(hybrid.bm, hybrid.exchange)
+    support, meta = load_stop(kept_stop_path(), hybrid.bm)
+    pose = standing_pose(chain, meta["L"])
+    return WalkStop(with_params, meta["L"], meta["T"], meta["alpha"], meta["mode"], with_horizon(held_support(chain, support)),
+                    balance(chain, pose))
