@@ -15,9 +15,11 @@ once).
 linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop. **Where a stop is kept** (the
 hybrid engine's walk of the default parameter set, started on the gait the package keeps a stop
 of, ``core/walking/stop.py``, made ready in a thread when the walk starts): the walk stops at the
-touchdown of the next step that aims at that gait (``Walker.stop``: the stop's 2 s of double
-support, then standing, docs/model.md section 14.2); from another gait it is first walked back to
-that gait's speed, then aimed at the gait itself (one transition step). Then the robot stands and
+touchdown of the next step that aims at that gait and starts within ``stop.SETTLED`` of its start
+(``Walker.stop``: the stop's 2 s of double support, then standing, docs/model.md section 14.2; a
+walk still settling after a push walks on, said once, its error falling fourfold a step); from
+another gait it is first walked back to that gait's speed, then aimed at the gait itself (one
+transition step). Then the robot stands and
 commands are refused as while standing. **Elsewhere** the command is walked as the slowest gait of
 the envelope, and once the walk is there (straight, at its command) the core plans the stop step
 from that gait, the one that walks (``start_stop.plan_stop``, in a thread of its own, once per gait
@@ -58,7 +60,7 @@ from ..core.model.biped import BipedModel
 from ..core.model.params import BipedParams, load_params
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
-from ..core.walking.stop import WalkStop, kept_stop
+from ..core.walking.stop import SETTLED, WalkStop, kept_stop, unsettled
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.runner import Walker
@@ -95,6 +97,7 @@ class SpeedCommand:
         self._stop: WalkStop | None = None  # the kept stop of the walk's gait, once made ready (start)
         self._stop_gait: PlannedOrbit | None = None  # the gait it stops from: the walk's first
         self._stop_home = False  # the follower has been sent back to the stop's gait's speed
+        self._stop_waits = False  # said that the stop waits for the walk to settle on its gait
         self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
         self._ended = False  # the walk ended: commands are ignored until the next starts
         self._grid = DEFAULTS.walk_steps
@@ -113,7 +116,7 @@ class SpeedCommand:
         publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time); with
         ``standing``, the walker stands: commands are refused; ``stoppable``: the walk can take a
         kept stop (the hybrid engine's paper walk), made ready in a thread (module docstring)."""
-        self._last, self._lapsed, self._stop_asked, self._stop_home = None, False, False, False
+        self._last, self._lapsed, self._stop_asked, self._stop_home, self._stop_waits = None, False, False, False, False
         with self._lock:
             self._walk, self._ended = self._walk + 1, False
             self._explained.clear()
@@ -275,6 +278,13 @@ class SpeedCommand:
         not to act before this step."""
         stop, gait, logger = self._stop, self._stop_gait, self.node.get_logger()
         if not stop.why_not(walker.orbit) and walker.state.aim.pending is None:
+            off = unsettled(walker.state.q, walker.state.qd, walker.orbit)
+            if off > SETTLED:  # settling after a push: a few steps more (fourfold a step)
+                if not self._stop_waits:
+                    self._stop_waits = True
+                    logger.info(f"speed command: 0 m/s: the walk is {off:.2g} off its gait, more than the {SETTLED:g} "
+                                "the stop is taken from: walking on until it has settled")
+                return True
             try:
                 walker.stop(stop)
             except ValueError as exc:

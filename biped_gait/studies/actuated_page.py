@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 
 from .figures import save
 from .lasting_page import AT_LIMIT, HEADING as LASTING_HEADING, MODES, default_joints, solved
-from .markdown import markdown_table, missing_study, stored_study
+from .markdown import markdown_table, missing_study, splice_section, stored_study
 
 ACTUATED_STUDY = "actuated-swing-study.json"  # beside the page
 ACTUATED_FIGURE = "actuated-effort.png"
@@ -247,21 +247,10 @@ def actuated_figure(study: ActuatedStudy) -> Figure:
     return fig
 
 
-def _section_end(text: list[str], start: int) -> int:
-    return next((k for k in range(start + 1, len(text)) if text[k].startswith("## ")), len(text))
-
-
 def splice(page: str, lines: list[str]) -> str:
-    """``page`` with its actuated-swing section (``HEADING`` up to the next ``## ``) replaced by
-    ``lines``; a page without one gets it after the lasting double support's section (where
-    ``results_page.render`` puts it), or at its end."""
-    text = page.splitlines()
-    if HEADING in text:
-        start = text.index(HEADING)
-        end = _section_end(text, start)
-    else:
-        start = end = _section_end(text, text.index(LASTING_HEADING)) if LASTING_HEADING in text else len(text)
-    return "\n".join([*text[:start], HEADING, "", *lines, "", *text[end:]]) + "\n"
+    """``page`` with its actuated-swing section replaced by ``lines``; a page without one gets it
+    after the lasting double support's section (``markdown.splice_section``)."""
+    return splice_section(page, HEADING, lines, LASTING_HEADING)
 
 
 def main(argv: list[str] | None = None) -> int:

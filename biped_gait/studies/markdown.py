@@ -21,3 +21,20 @@ def stored_study(name: str, command: str, date: str, commit: str, note: str = ""
 def missing_study(path, command: str, cost: str) -> list[str]:
     """A section's text when no stored study was found at ``path``: how to make it (``cost``: how long)."""
     return [f"No stored study at `{path}`: run `{command}` ({cost}) and the page again."]
+
+
+def _section_end(text: list[str], start: int) -> int:
+    return next((k for k in range(start + 1, len(text)) if text[k].startswith("## ")), len(text))
+
+
+def splice_section(page: str, heading: str, lines: list[str], after: str) -> str:
+    """``page`` with its section ``heading`` (up to the next ``## ``) replaced by ``lines``; a page
+    without one gets it after the section ``after`` (where ``results_page.render`` puts it), or at
+    its end."""
+    text = page.splitlines()
+    if heading in text:
+        start = text.index(heading)
+        end = _section_end(text, start)
+    else:
+        start = end = _section_end(text, text.index(after)) if after in text else len(text)
+    return "\n".join([*text[:start], heading, "", *lines, "", *text[end:]]) + "\n"
