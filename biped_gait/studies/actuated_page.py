@@ -13,7 +13,6 @@ lasting study). tau and d in s, E and W in N m s, torques in N m, alpha in degre
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 from dataclasses import dataclass
@@ -23,7 +22,7 @@ from matplotlib.figure import Figure
 
 from .figures import save
 from .lasting_page import AT_LIMIT, HEADING as LASTING_HEADING, MODES, default_joints, solved
-from .markdown import markdown_table, missing_study, splice_section, stored_study
+from .markdown import markdown_table, missing_study, page_argument, splice_section, stored_study
 
 ACTUATED_STUDY = "actuated-swing-study.json"  # beside the page
 ACTUATED_FIGURE = "actuated-effort.png"
@@ -254,15 +253,12 @@ def splice(page: str, lines: list[str]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description="rewrite the results page's actuated-swing section from its stored "
-                                     "study alone (the rest of the page untouched)")
-    parser.add_argument("--page", type=Path, default=Path("docs/results.md"))
-    args = parser.parse_args(argv)
-    path = args.page.parent / ACTUATED_STUDY
+    page = page_argument(argv, "actuated-swing", "its stored study")
+    path = page.parent / ACTUATED_STUDY
     study = ActuatedStudy.load(path) if path.is_file() else None
-    args.page.write_text(splice(args.page.read_text(), actuated_lines(study, path)))
+    page.write_text(splice(page.read_text(), actuated_lines(study, path)))
     if study is not None:
-        save(actuated_figure(study), args.page.parent / ACTUATED_FIGURE)
+        save(actuated_figure(study), page.parent / ACTUATED_FIGURE)
     return 0
 
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Sequence
+from pathlib import Path
 
 
 def markdown_table(header: Sequence[str], rows: Sequence[Sequence[str]]) -> list[str]:
@@ -38,3 +40,12 @@ def splice_section(page: str, heading: str, lines: list[str], after: str) -> str
     else:
         start = end = _section_end(text, text.index(after)) if after in text else len(text)
     return "\n".join([*text[:start], heading, "", *lines, "", *text[end:]]) + "\n"
+
+
+def page_argument(argv: list[str] | None, section: str, source: str) -> Path:
+    """The ``--page`` (default docs/results.md) of a command that rewrites the page's ``section``
+    from ``source`` alone."""
+    parser = argparse.ArgumentParser(description=f"rewrite the results page's {section} section from {source} alone "
+                                     "(the rest of the page untouched)")
+    parser.add_argument("--page", type=Path, default=Path("docs/results.md"))
+    return parser.parse_args(argv).page

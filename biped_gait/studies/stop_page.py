@@ -9,9 +9,7 @@ alone, as ``actuated_page`` does its own.
 
 from __future__ import annotations
 
-import argparse
 import math
-from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -22,7 +20,7 @@ from ..core.model.biped import BipedModel
 from ..core.model.params import load_params
 from .actuated_page import HEADING as ACTUATED_HEADING
 from .figures import save
-from .markdown import markdown_table, splice_section
+from .markdown import markdown_table, page_argument, splice_section
 
 HEADING = "## The stop: from the gait to standing (beyond the paper)"
 STOP_FIGURE = "stop.png"
@@ -98,13 +96,10 @@ def splice(page: str, lines: list[str]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description="rewrite the results page's stop section from the kept plan alone "
-                                     "(the rest of the page untouched)")
-    parser.add_argument("--page", type=Path, default=Path("docs/results.md"))
-    args = parser.parse_args(argv)
+    page = page_argument(argv, "stop", "the kept plan")
     plan = kept_stop_plan()
-    args.page.write_text(splice(args.page.read_text(), stop_lines(*plan)))
-    save(stop_figure(*plan), args.page.parent / STOP_FIGURE)
+    page.write_text(splice(page.read_text(), stop_lines(*plan)))
+    save(stop_figure(*plan), page.parent / STOP_FIGURE)
     return 0
 
 
