@@ -98,6 +98,7 @@ class SpeedCommand:
         self._stop_gait: PlannedOrbit | None = None  # the gait it stops from: the walk's first
         self._stop_home = False  # the follower has been sent back to the stop's gait's speed
         self._stop_waits = False  # said that the stop waits for the walk to settle on its gait
+        self._preparing: threading.Thread | None = None  # making the kept stop ready (start), until joined
         self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
         self._ended = False  # the walk ended: commands are ignored until the next starts
         self._grid = DEFAULTS.walk_steps
@@ -120,9 +121,9 @@ class SpeedCommand:
         with self._lock:
             self._walk, self._ended = self._walk + 1, False
             self._explained.clear()
-            self._stop, self._stop_gait = None, None
+            self._stop, self._stop_gait, self._preparing = None, None, None
         if stoppable and not standing:
-            self._prepare_stop(walker.orbit, source)
+            self._preparing = self._prepare_stop(walker.orbit, source)
         if standing:
             with self._lock:
                 self.follower, self._standing, pending = None, walker, self._pending
@@ -152,9 +153,9 @@ class SpeedCommand:
             self.follower, self._standing, self._pending = None, None, None
             self._walk, self._ended = self._walk + 1, True
 
-    def _prepare_stop(self, gait: PlannedOrbit, source: str | None) -> None:
-        """The kept stop of ``gait``, made ready in a thread on a model of its own (Pinocchio's data
-        are the walk thread's); none if the package keeps no stop of that gait."""
+    def _prepare_stop(self, gait: PlannedOrbit, source: str | None) -> threading.Thread:
+        """The thread that makes the kept stop of ``gait`` ready, on a model of its own (Pinocchio's
+        data are the walk thread's); none if the package keeps no stop of that gait."""
         walk = self._walk
 
         def prepare() -> None:
@@ -168,7 +169,9 @@ class SpeedCommand:
                 if self._walk == walk:
                     self._stop, self._stop_gait = stop, gait
 
-        threading.Thread(target=prepare, name="stop-prepare", daemon=True).start()
+        thread = threading.Thread(target=prepare, name="stop-prepare", daemon=True)
+        thread.start()
+        return thread
 
     def on_twist(self, msg: Twist) -> None:
         """A /cmd_vel message: linear.x the commanded speed (m/s), angular.z the yaw rate (rad/s);
@@ -205,8 +208,9 @@ class SpeedCommand:
         if follower is None:  # the walk ended meanwhile
             return
         self._stop_asked = speed < STOP_SPEED  # said from the gait that walks once it is there (before_step)
-        self._stop_home = False
-        if self._stop_asked and self._stop is not None:  # walked to the stop's gait (before_step)
+        if not self._stop_asked:
+            self._stop_home = self._stop_waits = False
+        elif self._stop is not None or self._preparing is not None:  # walked to the stop's gait (before_step)
             return
         if yaw_rate and follower.envelope.max_curvature == 0.0 and "angular.z" not in self._said_ignored:
             self._said_ignored.add("angular.z")
@@ -260,6 +264,11 @@ class SpeedCommand:
                 f"speed command: no /cmd_vel for {silent:.3f} s of simulated time (cmd_vel_timeout {self.timeout:g} s): "
                 "taken as 0 m/s, a stop")
             self._command(0.0, 0.0)
+        if self._stop_asked and self._preparing is not None:  # the kept stop made ready (2.5 s from the start)
+            self._preparing.join()
+            self._preparing = None
+            if self._stop is None:  # none kept for this walk's gait: the slowest gait, and why
+                self._command(0.0, 0.0)
         if self._stop_asked and self._stop is not None and self._stopped(walker, follower):
             return
         transition = follower.before_step(walker)
@@ -270,7 +279,6 @@ class SpeedCommand:
                 follower.speed - follower.commanded) < 1e-9:  # at the slowest gait, straight: the gait that walks
             self._explain("stop", follower.orbit, follower.bm.params, "speed command: cannot stop from",
                           "walking on at the slowest gait")
-
 
     def _stopped(self, walker: Walker, follower: SpeedFollower) -> bool:
         """Towards the kept stop (module docstring): stop at this step's touchdown if it aims at the
@@ -290,6 +298,7 @@ class SpeedCommand:
             except ValueError as exc:
                 logger.warn(f"speed command: {exc}; walking on")
                 self._stop = None
+                self._command(0.0, 0.0)  # the slowest gait, and why it cannot stop
                 return False
             logger.info(f"speed command: 0 m/s: stopping at the touchdown of step {walker.state.step} (the kept stop "
                         f"of the gait L = {stop.step_length:g} m, T = {stop.period:g} s: {stop.plan.duration:g} s with "
