@@ -17,8 +17,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import JointState
 
 from biped_gait.ros.client import ClientSide
-from biped_gait.ros.qos import LATCHED
-from biped_gait_interfaces.msg import GaitEvent, GaitPhase, VelocityEnvelope
+from biped_gait_interfaces.msg import GaitEvent, GaitPhase
 
 from .ros_helpers import planner_process, start_simulator, stop_node
 

@@ -1,10 +1,10 @@
 """The stop as a B-spline (core/gait/spline_stop.py, docs/model.md section 14): its mesh, the kept
 stop of the default gait checked against the model's own dynamics (not the program's), and that
-stop walked in the hybrid engine from the held touchdown into standing."""
+stop walked by the walker (``Walker.stop``) from a touchdown of the gait into standing, in the
+hybrid engine."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import casadi as ca

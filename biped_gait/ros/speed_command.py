@@ -60,7 +60,7 @@ from ..core.model.biped import BipedModel
 from ..core.model.params import BipedParams, load_params
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
-from ..core.walking.stop import SETTLED, WalkStop, kept_stop, unsettled
+from ..core.walking.stop import Unsettled, WalkStop, kept_stop
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.runner import Walker
@@ -286,15 +286,13 @@ class SpeedCommand:
         not to act before this step."""
         stop, gait, logger = self._stop, self._stop_gait, self.node.get_logger()
         if not stop.why_not(walker.orbit) and walker.state.aim.pending is None:
-            off = unsettled(walker.state.q, walker.state.qd, walker.orbit)
-            if off > SETTLED:  # settling after a push: a few steps more (fourfold a step)
-                if not self._stop_waits:
-                    self._stop_waits = True
-                    logger.info(f"speed command: 0 m/s: the walk is {off:.2g} off its gait, more than the {SETTLED:g} "
-                                "the stop is taken from: walking on until it has settled")
-                return True
             try:
                 walker.stop(stop)
+            except Unsettled as exc:  # settling after a push: a few steps more (fourfold a step)
+                if not self._stop_waits:
+                    self._stop_waits = True
+                    logger.info(f"speed command: 0 m/s: {exc}: walking on until the walk has settled")
+                return True
             except ValueError as exc:
                 logger.warn(f"speed command: {exc}; walking on")
                 self._stop = None

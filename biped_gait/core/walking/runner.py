@@ -41,7 +41,7 @@ from .phases.standing import Standing
 from .phases.stopping import StopTouchdown
 from .push import AppliedPush, Push, TrunkPush
 from .state import WalkState
-from .stop import SETTLED, WalkStop, unsettled
+from .stop import SETTLED, Unsettled, WalkStop, unsettled
 
 LINKS_CHECKED_AFTER = 0.05  # of the aimed period: a link below the ground is a fall from then on (not at the toe-off)
 SLIP_LIMIT = LIFT_LIMIT = 1e-3
@@ -145,18 +145,19 @@ class Walker:
         and from its end the robot stands (``phases.stopping``). ``ValueError`` with the reason if
         the current step cannot: it is under way or not a ballistic single support (the MuJoCo
         walk's), it aims at another gait than the stop's, another gait is to be aimed at next, or it
-        starts farther from its gait's start than ``stop.SETTLED`` (a walk still settling after a
-        push: a few steps more)."""
+        starts farther from its gait's start than ``stop.SETTLED`` (``stop.Unsettled``: a walk still
+        settling after a push, a few steps more)."""
         phase, aim, s = self.phase, self.state.aim, self.state
         if type(phase) is not SingleSupport or s.t_step > 0.0:
             raise ValueError("a stop begins with a step of the hybrid engine's ballistic walk, before it starts")
-        off = unsettled(s.q, s.qd, aim.orbit)
         why = stop.why_not(aim.orbit) or ("the walk is aimed at another gait from this step's touchdown"
-                                          if aim.pending is not None else "") or (
-            f"the step starts {off:.2g} off its gait's start, more than the {SETTLED:g} it stops from" if off > SETTLED
-            else "")
+                                          if aim.pending is not None else "")
         if why:
             raise ValueError(f"cannot stop at this step: {why}")
+        off = unsettled(s.q, s.qd, aim.orbit)
+        if off > SETTLED:
+            raise Unsettled(f"cannot stop at this step: the step starts {off:.2g} off its gait's start, more than the "
+                            f"{SETTLED:g} it stops from")
         self.phase = SingleSupport(StopTouchdown(stop.plan, Standing(stop.balance)))
 
     def shove(self, delta_qd: np.ndarray) -> None:

@@ -32,6 +32,11 @@ SAME_GAIT = 1e-9  # m, s, rad: a gait this close to the stop's in L, T and alpha
 SETTLED = 3e-4
 
 
+class Unsettled(ValueError):
+    """A step that starts farther than ``SETTLED`` from its gait's start: the stop waits (the walk
+    settles in a few steps)."""
+
+
 @dataclass(frozen=True, eq=False)
 class WalkStop:
     """A stop from the gait (``params``, ``step_length`` m, ``period`` s, ``arm_amplitude`` rad,
