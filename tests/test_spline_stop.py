@@ -1,4 +1,4 @@
-"""The stop as a B-spline (core/gait/spline_stop.py, docs/model.md section 14): its mesh, the kept
+"""The stop as a B-spline (core/gait/spline_support.py, docs/model.md section 14): its mesh, the kept
 stop of the default gait checked against the model's own dynamics (not the program's), and that
 stop walked by the walker (``Walker.stop``) from a touchdown of the gait into standing, in the
 hybrid engine."""
@@ -15,8 +15,8 @@ import pytest
 from biped_gait.core.dynamics.closed_chain import ClosedChain
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.gait.lasting import LastingRequest
-from biped_gait.core.gait.spline_stop import (FIRST_INTERVAL, LONGEST_INTERVAL, SAMPLE_STEP, SplineStopProgram,
-                                              kept_stop_path, load_stop, seed, spline_mesh)
+from biped_gait.core.gait.spline_support import (FIRST_INTERVAL, LONGEST_INTERVAL, SAMPLE_STEP, SplineProgram,
+                                                 kept_stop_path, load_plan, seed, spline_mesh)
 from biped_gait.core.walking.balance import standing_pose
 from biped_gait.core.walking.events import STANDING as STANDING_PHASE, STOPPING, Finished, StepSamples, Touchdown
 from biped_gait.core.walking.orbit import PlannedOrbit
@@ -41,7 +41,7 @@ STILL = 1e-3  # m/s: ... the pelvis's speed under this over its last 2 s (the st
 @pytest.fixture(scope="module")
 def kept():
     planner = GaitPlanner(modes=("normal",))
-    support, meta = load_stop(kept_stop_path(), planner.model)
+    support, meta = load_plan(kept_stop_path(), planner.model)
     gait = planner.plan(GaitRequest(meta["L"], meta["T"], meta["alpha"]))
     chain = ClosedChain(planner.model, planner.hybrid.exchange)
     pose = standing_pose(chain, meta["L"])
@@ -77,8 +77,9 @@ def test_the_seed_meets_the_programs_ends_and_closure(kept):
     boundary = lasting.boundary(gait, pose.q)
     collocation = lasting.stop(gait, LastingRequest(1.0, "l1", 50.0, 0.1), pose.q)
     assert collocation.success, collocation.message
-    program = SplineStopProgram(lasting.bm, spline_mesh(0.3), "l1", lasting.friction, lasting.exchange, lasting.flow)
-    x0 = seed(program, boundary, lasting.program("stop", "l1").values(collocation.solution))
+    program = SplineProgram(lasting.bm, spline_mesh(0.3), "l1", lasting.friction, lasting.exchange, lasting.flow)
+    values = lasting.program("stop", "l1").values(collocation.solution)
+    x0 = seed(program, boundary, values, values["xd_held"][lasting.bm.ds_of_single])
     problem = program._warm[0]
     params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a, [0.3, 0.0, 0.5]])
     rows = np.array(ca.Function("g", [problem["x"], problem["p"]], [problem["g"]])(x0, params)).ravel()

@@ -113,7 +113,7 @@ OVER_BUDGET = {
                                           "as keyword options with defaults",
     "core/gait/lasting.py:LastingProgram._phase": "one phase of the collocation NLP from its symbolic pieces",
     "core/gait/lasting.py:LastingProgram._held": "the closed chain's equations at one collocation point, symbolic",
-    "core/gait/spline_stop.py:SplineStopProgram._phase": "LastingProgram._phase's override, the same pieces",
+    "core/gait/spline_support.py:SplineProgram._phase": "LastingProgram._phase's override, the same pieces",
     "core/walking/transitions.py:SpeedFollower.__init__": "its three limits of change per step, one value to be",
     "ros/speed_command.py:SpeedCommand.__init__": "the same three limits, passed on to the follower",
     "core/walking/steering.py:reference": "the orbit's ends, velocities and period, as an atlas node or a plan has them",

@@ -1,6 +1,6 @@
 """The results page's section on the stop (docs/model.md sections 14 and 14.2): the default gait
 brought to rest in one double support of 2 s, read from the plan the package keeps
-(``core/gait/spline_stop.kept_stop_path``; ``studies/stop_study.py`` makes it): its duration,
+(``core/gait/spline_support.kept_stop_path``; ``studies/spline_study.py`` makes it): its duration,
 effort, peak torques and friction used, and a picture of it. Nothing is solved.
 
 ``python -m biped_gait.studies.stop_page`` rewrites the section (and its figure) of an existing page
@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..core.gait.lasting_support import LastingSupport
-from ..core.gait.spline_stop import kept_stop_path, load_stop
+from ..core.gait.spline_support import kept_stop_path, load_plan
 from ..core.model.biped import BipedModel
 from ..core.model.params import load_params
 from .actuated_page import HEADING as ACTUATED_HEADING
@@ -24,13 +24,13 @@ from .markdown import markdown_table, page_argument, splice_section
 
 HEADING = "## The stop: from the gait to standing (beyond the paper)"
 STOP_FIGURE = "stop.png"
-STUDY_COMMAND = "python -m biped_gait.studies.stop_study"
+STUDY_COMMAND = "python -m biped_gait.studies.spline_study"
 
 
 def kept_stop_plan() -> tuple[BipedModel, LastingSupport, dict]:
     """The default parameter set's model and the package's kept stop, with its ``meta``."""
     model = BipedModel.from_params(load_params(None))
-    support, meta = load_stop(kept_stop_path(), model)
+    support, meta = load_plan(kept_stop_path(), model)
     return model, support, meta
 
 

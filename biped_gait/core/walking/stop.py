@@ -1,5 +1,5 @@
 """The walk's stop, ready to walk (docs/model.md section 14.2): a stop planned from a gait's
-touchdown into the standing posture (``core/gait/spline_stop.py``; the package keeps the default
+touchdown into the standing posture (``core/gait/spline_support.py``; the package keeps the default
 gait's, ``kept_stop_path``), with what the walk needs of it: the plan to track
 (``held_support.HeldSupport``, its feedback the finite-horizon LQR's, ``tracking.with_horizon``) and the balance controller that holds the posture it ends in
 (``balance``). ``Walker.stop`` walks it at the touchdown of a step aimed at its gait
@@ -17,7 +17,7 @@ import numpy as np
 
 from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.hybrid import HybridStep
-from ..gait.spline_stop import kept_stop_path, load_stop
+from ..gait.spline_support import kept_stop_path, load_plan
 from ..model.params import BipedParams, load_params
 from .balance import Balance, balance, standing_pose
 from .held_support import HeldSupport, held_support
@@ -82,7 +82,7 @@ def kept_stop(hybrid: HybridStep) -> WalkStop:
     if hybrid.bm.params != with_params:
         raise ValueError(f"a stop is kept for the parameter set {with_params.name} only, not for {hybrid.bm.params.name}")
     chain = ClosedChain(hybrid.bm, hybrid.exchange)
-    support, meta = load_stop(kept_stop_path(), hybrid.bm)
+    support, meta = load_plan(kept_stop_path(), hybrid.bm)
     pose = standing_pose(chain, meta["L"])
     return WalkStop(with_params, meta["L"], meta["T"], meta["alpha"], meta["mode"], with_horizon(held_support(chain, support)),
                     balance(chain, pose))

@@ -1,24 +1,28 @@
-"""The stop's double support as one quintic B-spline (docs/model.md section 14, "The stop as a
-B-spline"): from the gait's touchdown (I^- and the held impact, as ``LastingProgram``'s stop) to
-rest in the standing posture, the motion q(t) one spline whose control points are the unknowns.
+"""The stop's and the start's double support as one quintic B-spline (docs/model.md section 14,
+"The stop as a B-spline", "The start as a B-spline"): the stop from the gait's touchdown (I^- and the
+held impact, as ``LastingProgram``'s stop) to rest in the standing posture; the start from rest in
+that posture to the gait's touchdown posture, then I^+ onto the gait's next step (as
+``LastingProgram``'s start). The motion q(t) is one spline whose control points are the unknowns.
 
 **Why a spline.** The Hermite-Simpson stop (``LastingProgram``, 10 intervals) converges, but its
 reference between the collocation points is no motion of the chain (the feet pull by kilonewtons
 there) and finer meshes did not converge. Here q, qd and qdd are linear in the control points: the
 plan is a motion at every instant, and the walk tracks its samples every 5 ms (``held_support``).
 
-**The rows** (``SplineMesh``). Knots graded from ``FIRST_INTERVAL`` at the touchdown by
-``GROWTH`` to ``LONGEST_INTERVAL``. At samples every ``SAMPLE_STEP`` and at the closure points:
-the closed chain's inverse dynamics with the torques and the new tip's reaction (its held rows)
-unknown per sample, both reactions pressing by the least normal force within the friction
-pyramid, the torques within the joint table's limits. The new tip held at the interior Greville
-points (``closure``: as many as the control points left free by the ends). The rotation about the
-feet line has no torque and, at the ankle roll 0, no reaction term: its row of the equations of
-motion is a condition on the spline alone, imposed at the closure points, at the first sample and
-at every sample within ``END_ROLL`` of either end (missed there, the motion asks the feet to pull),
-never at the last sample (at rest there the rest rows imply it: with it the equality rows are
-rank-deficient). The ends: the first posture and velocity the held impact's, the last posture
-the standing one with velocity and acceleration zero.
+**The rows** (``SplineMesh``). Knots graded from ``FIRST_INTERVAL`` at the phase's moving end (the
+stop's touchdown, the start's lift-off) by ``GROWTH`` to ``LONGEST_INTERVAL``. At samples every
+``SAMPLE_STEP`` and at the closure points: the closed chain's inverse dynamics with the torques and
+the new tip's reaction (its held rows) unknown per sample, both reactions pressing by the least
+normal force within the friction pyramid, the torques within the joint table's limits. The new tip
+held at the interior Greville points (``closure``: as many as the control points left free by the
+ends). The rotation about the feet line has no torque and, at the ankle roll 0, no reaction term:
+its row of the equations of motion is a condition on the spline alone, imposed at the closure
+points, at the moving end's sample and at every sample within ``END_ROLL`` of either end (missed
+there, the motion asks the feet to pull), never at the end at rest (there the rest rows imply it:
+with it the equality rows are rank-deficient). The ends: the stop's first posture and velocity the
+held impact's, its last the standing posture with velocity and acceleration zero; the start's first
+the standing posture at rest (velocity and acceleration zero), its last the gait's touchdown
+posture with the new tip at rest and the velocity free (I^+ takes it onto the gait's).
 
 **Solving.** From a least-acceleration spline through the ends and the closure (``seed``), IPOPT
 converges only with the friction lifted and pulling allowed; ``STAGES`` then brings the friction
@@ -50,8 +54,12 @@ LONGEST_INTERVAL = 0.025  # s: ... up to this
 SAMPLE_STEP = 0.005  # s: the rows are held this often (and at the closure points)
 END_ROLL = 0.1  # s: the feet-line roll row at every sample this close to either end
 MAX_ITERATIONS = 3000  # a stage from the last takes 200 to 500; the free start 1,500
+# The start's seed: the weight (1/s) of its lift-off velocity's squared distance from the collocation
+# start's beside the integral of the squared acceleration (rad^2/s^3).
+LIFT_OFF_WEIGHT = 1e3
+KINDS = ("stop", "start")  # the phases planned as a spline: each has one end at rest, the other moving
 TOLERANCE = 1e-6  # IPOPT's on the scaled KKT conditions and the constraint violation (N, N m)
-# A solve from a solution of nearly the same program (``SplineStopProgram(near=True)``): IPOPT's
+# A solve from a solution of nearly the same program (``SplineProgram(near=True)``): IPOPT's
 # start kept where it is (its default push off the bounds of 1e-2 costs 2e5 of violation there), and
 # a point feasible to TOLERANCE whose scaled optimality error stays within 1e-4 for ten iterations
 # taken (IPOPT's "acceptable": its restoration can fail at such a point, 2.8e-7 off its rows).
@@ -60,7 +68,7 @@ NEAR_START = {"ipopt.bound_push": 1e-8, "ipopt.bound_frac": 1e-8, "ipopt.mu_init
 
 
 def kept_stop_path() -> Path:
-    """The package's kept stop of the default gait (``studies/stop_study.py`` writes it)."""
+    """The package's kept stop of the default gait (``studies/spline_study.py`` writes it)."""
     return Path(str(resources.files("biped_gait.core.data"))) / "stop" / "aoustin2013-default.npz"
 
 
@@ -84,10 +92,11 @@ STAGES = (Stage(-1e5, 1000.0), Stage(0.0, 100.0), Stage(0.0, 20.0), Stage(0.0, 5
 
 @dataclass(frozen=True, eq=False)
 class SplineMesh:
-    """The spline of a stop of ``duration`` s: its ``knots`` (in s = t / d, clamped), the
-    ``samples`` where the rows are held (in s), of them those with the feet-line roll row
-    (``roll``, booleans), and the ``closure`` points where the new tip is held (in s)."""
+    """The spline of a ``kind`` of phase (``KINDS``) of ``duration`` s: its ``knots`` (in s = t / d,
+    clamped), the ``samples`` where the rows are held (in s), of them those with the feet-line roll
+    row (``roll``, booleans), and the ``closure`` points where the new tip is held (in s)."""
 
+    kind: str
     duration: float
     knots: np.ndarray
     samples: np.ndarray
@@ -106,11 +115,13 @@ class SplineMesh:
 
 
 
-def spline_mesh(duration: float, end_roll: float = END_ROLL) -> SplineMesh:
-    """The mesh of a stop of ``duration`` s (module docstring), the roll row at every sample within
-    ``end_roll`` s of either end."""
+def spline_mesh(duration: float, end_roll: float = END_ROLL, kind: str = "stop") -> SplineMesh:
+    """The mesh of a ``kind`` of phase of ``duration`` s (module docstring), the roll row at every
+    sample within ``end_roll`` s of either end. The start's is the stop's reversed in time."""
+    if kind not in KINDS:
+        raise ValueError(f"a spline phase is one of {', '.join(KINDS)}, got {kind!r}")
     if not duration > 0.0:
-        raise ValueError(f"a stop's double support needs a positive duration, got {duration!r}")
+        raise ValueError(f"a {kind}'s double support needs a positive duration, got {duration!r}")
     intervals, total = [], 0.0
     while total < duration - 1e-12:
         h = min(FIRST_INTERVAL * GROWTH ** len(intervals), LONGEST_INTERVAL)
@@ -118,24 +129,29 @@ def spline_mesh(duration: float, end_roll: float = END_ROLL) -> SplineMesh:
             h = duration - total
         intervals.append(h)
         total += h
+    if kind == "start":  # graded towards the lift-off
+        intervals.reverse()
     breaks = np.concatenate([[0.0], np.cumsum(intervals)]) / duration
     breaks[-1] = 1.0
     knots = np.concatenate([np.zeros(DEGREE), breaks, np.ones(DEGREE)])
     count = len(knots) - DEGREE - 1
     greville = np.array([knots[i + 1:i + DEGREE + 1].mean() for i in range(count)])
-    closure = greville[2:-3]  # three control points fixed at each end, two of them at the start
+    # The control points the ends fix: the stop's posture and velocity at its start, posture,
+    # velocity and acceleration at its end; the start's three at its start, its last posture.
+    closure = greville[2:-3] if kind == "stop" else greville[3:-1]
     dense = np.linspace(0.0, 1.0, int(round(duration / SAMPLE_STEP)) + 1)
     samples = np.unique(np.concatenate([dense, closure]))
     near_end = (samples * duration < end_roll) | (samples * duration > duration - end_roll)
     at_closure = np.array([np.min(np.abs(closure - s)) < 1e-12 for s in samples])
     roll = at_closure | near_end
-    roll[0], roll[-1] = True, False
-    return SplineMesh(duration, knots, samples, roll, closure)
+    roll[0], roll[-1] = (True, False) if kind == "stop" else (False, True)
+    return SplineMesh(kind, duration, knots, samples, roll, closure)
 
 
-class SplineStopProgram(LastingProgram):
-    """``LastingProgram``'s stop with its phase the spline of ``mesh`` (module docstring); ``near``:
-    every solve starts from a solution of nearly the same program (``NEAR_START``)."""
+class SplineProgram(LastingProgram):
+    """``LastingProgram``'s stop or start (``mesh.kind``) with its phase the spline of ``mesh``
+    (module docstring); ``near``: every solve starts from a solution of nearly the same program
+    (``NEAR_START``)."""
 
     SOLVER_OPTIONS = {"ipopt.max_iter": MAX_ITERATIONS, "ipopt.tol": TOLERANCE, "ipopt.constr_viol_tol": TOLERANCE}
 
@@ -143,8 +159,8 @@ class SplineStopProgram(LastingProgram):
                  flow=None, near: bool = False) -> None:
         self.mesh = mesh
         if near:
-            self.SOLVER_OPTIONS = {**SplineStopProgram.SOLVER_OPTIONS, **NEAR_START}
-        super().__init__(bm, "stop", 1, effort, friction, exchange, flow)
+            self.SOLVER_OPTIONS = {**SplineProgram.SOLVER_OPTIONS, **NEAR_START}
+        super().__init__(bm, mesh.kind, 1, effort, friction, exchange, flow)
 
     def _phase(self, nlp, p_d, q_first, v_first, q_last, rest_last, tip_t, b, press, cost, least) -> list:
         mesh, nq, na, rows, at = self.mesh, self.nq, self.na, self.rows, self.at.tolist()
@@ -178,7 +194,7 @@ class SplineStopProgram(LastingProgram):
         return self.mesh.samples * duration, _trapezoid(self.mesh.samples) * duration
 
     def solve_stage(self, boundary: Boundary, stage: Stage, x0: np.ndarray) -> LastingSupport:
-        """The stop between ``boundary``'s ends at ``stage``'s margins, IPOPT started at ``x0``
+        """The phase between ``boundary``'s ends at ``stage``'s margins, IPOPT started at ``x0``
         (scaled unknowns: ``seed``'s or a solution's ``x``)."""
         params = np.concatenate([boundary.q_t, boundary.q_rest, boundary.xd_b, boundary.xd_a,
                                  [self.mesh.duration, stage.least_normal_force, stage.friction]])
@@ -191,19 +207,26 @@ class SplineStopProgram(LastingProgram):
         return self._support(self.mesh.duration, stats, out, elapsed, solution)
 
 
-def _kinematic_rows(program: SplineStopProgram, control, duration, ends: tuple, tip) -> list[tuple]:
-    """The rows on the spline's control points alone, each with what it says: the first posture
-    and velocity, the last posture, at rest there (velocity and acceleration), the new tip at
-    ``tip`` (its held rows) at the closure points. ``control``: control_points x nq (CasADi);
-    ``duration`` (s, a number or a symbol); ``ends``: the first posture and velocity, the last posture."""
+def _kinematic_rows(program: SplineProgram, control, duration, ends: tuple, tip) -> list[tuple]:
+    """The rows on the spline's control points alone, each with what it says: the first and the
+    last posture; the stop's first velocity and rest at its end (velocity and acceleration), the
+    start's rest at its beginning and its new tip at rest at its end; the new tip at ``tip`` (its held rows) at the closure points.
+    ``control``: control_points x nq (CasADi); ``duration`` (s, a number or a symbol); ``ends``: the
+    first posture, the stop's first velocity (the start's: None), the last posture."""
     mesh = program.mesh
     q_first, v_first, q_last = ends
 
     def at(points, derivative=0):
         return ca.mtimes(ca.DM(mesh.basis(points, derivative)), control)
 
-    rows = [(at([0.0]).T - q_first, "the first posture"), (at([0.0], 1).T / duration - v_first, "the first velocity"),
-            (at([1.0]).T - q_last, "the last posture"), (ca.vertcat(at([1.0], 1).T, at([1.0], 2).T), "at rest")]
+    rows = [(at([0.0]).T - q_first, "the first posture"), (at([1.0]).T - q_last, "the last posture")]
+    if mesh.kind == "stop":
+        rows += [(at([0.0], 1).T / duration - v_first, "the first velocity"),
+                 (ca.vertcat(at([1.0], 1).T, at([1.0], 2).T), "at rest")]
+    else:
+        rows.append((ca.vertcat(at([0.0], 1).T, at([0.0], 2).T), "at rest"))
+        _, j2, _ = program.f_tip(program._embed(q_last))
+        rows.append((ca.mtimes(j2[program.rows, :], program._embed(at([1.0], 1).T / duration)), "the new tip at rest"))
     closure = at(mesh.closure)
     rows += [(program.f_tip(program._embed(closure[j, :].T))[0][program.rows] - tip, "the new tip held")
              for j in range(len(mesh.closure))]
@@ -219,12 +242,13 @@ def _trapezoid(points: np.ndarray) -> np.ndarray:
     return weights
 
 
-def seed(program: SplineStopProgram, boundary: Boundary, impulsive: dict[str, np.ndarray]) -> np.ndarray:
+def seed(program: SplineProgram, boundary: Boundary, impulsive: dict[str, np.ndarray], velocity: np.ndarray) -> np.ndarray:
     """The scaled unknowns IPOPT starts the free stage from: the spline of least squared
-    acceleration through the ends and the closure (a small IPOPT program on the control points),
-    the first velocity the held velocity of ``impulsive`` (``values`` of a solved collocation stop,
-    whose I^- and held impact it also lends); per sample the torques and the new tip's reaction
-    that satisfy the equations of motion other than the roll in least squares."""
+    acceleration through the ends and the closure (a small IPOPT program on the control points), its
+    moving end's velocity ``velocity`` (rad/s: the stop's first, the start's last; a solved
+    collocation phase's), the impulses those of ``impulsive`` (``values`` of that phase: the stop's
+    I^- and held impact, the start's I^+); per sample the torques and the new tip's reaction that
+    satisfy the equations of motion other than the roll in least squares."""
     mesh, nq, at = program.mesh, program.nq, program.at
     n, d = mesh.control_points, mesh.duration
     p = ca.SX.sym("P", n * nq)
@@ -232,17 +256,23 @@ def seed(program: SplineStopProgram, boundary: Boundary, impulsive: dict[str, np
     acceleration = ca.mtimes(ca.DM(mesh.basis(mesh.samples, 2)), control) / d ** 2
     objective = ca.sum1(ca.DM(_trapezoid(mesh.samples) * d) * ca.sum2(acceleration ** 2))
     tip = program.f_tip(program._embed(ca.DM(boundary.q_t)))[0][program.rows]
-    ends = (boundary.q_t, impulsive["xd_held"][at], boundary.q_rest)
+    stop = mesh.kind == "stop"
+    ends = (boundary.q_t, velocity, boundary.q_rest) if stop else (boundary.q_rest, None, boundary.q_t)
     rows = [row for row, _ in _kinematic_rows(program, control, d, ends, tip)]
+    if not stop:  # the lift-off's velocity near ``velocity``: some of it may leave the joints' ranges
+        last = ca.mtimes(ca.DM(mesh.basis([1.0], 1)), control).T / d
+        objective += LIFT_OFF_WEIGHT * ca.sumsqr(last - velocity)
     lower, upper = program._ranges()
     kinematic = ca.nlpsol("least_acceleration", "ipopt", {"x": p, "f": objective, "g": ca.vertcat(*rows)},
                           {"ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes"})
-    start = np.linspace(boundary.q_t, boundary.q_rest, n).ravel()
+    start = np.linspace(ends[0], ends[2], n).ravel()
     solved = kinematic(x0=start, lbx=np.tile(lower, n), ubx=np.tile(upper, n), lbg=0, ubg=0)
     control = np.array(solved["x"]).reshape(n, nq)
     chain = ClosedChain(program.bm, program.exchange)
     q_s, v_s, a_s = (mesh.basis(mesh.samples, k) @ control / d ** k for k in range(3))
-    per_sample: dict[str, list] = {"P": [control.ravel()], "tau": [], "f_new": [], "s": [np.abs(impulsive["i_minus"])]}
+    # The effort's slacks in the program's order: the stop's I^- before the phase, the start's I^+ after.
+    per_sample: dict[str, list] = {"P": [control.ravel()], "tau": [], "f_new": [],
+                                   "s": [np.abs(impulsive["i_minus"])] if stop else []}
     for q, v, a in zip(q_s, v_s, a_s):
         x = np.zeros(program.nx)
         x[at] = q
@@ -258,6 +288,8 @@ def seed(program: SplineStopProgram, boundary: Boundary, impulsive: dict[str, np
         per_sample["tau"].append(tau)
         per_sample["f_new"].append(force)
         per_sample["s"].append(np.abs(tau))
+    if not stop:
+        per_sample["s"].append(np.abs(impulsive["i_plus"]))
     w0, offset, seen = np.zeros(len(program.lbw)), 0, {}
     for name, size in program.names:
         k = seen.get(name, 0)
@@ -270,9 +302,9 @@ def seed(program: SplineStopProgram, boundary: Boundary, impulsive: dict[str, np
     return w0 / program.scale
 
 
-def continuation(program: SplineStopProgram, boundary: Boundary, x0: np.ndarray, stages=STAGES,
+def continuation(program: SplineProgram, boundary: Boundary, x0: np.ndarray, stages=STAGES,
                  report=None) -> LastingSupport:
-    """The stop at the last of ``stages``, each solved from the one before (the first from ``x0``);
+    """The phase at the last of ``stages``, each solved from the one before (the first from ``x0``);
     the first stage that fails is returned as it is. ``report(stage, support)`` after each."""
     support = None
     for stage in stages:
@@ -285,10 +317,10 @@ def continuation(program: SplineStopProgram, boundary: Boundary, x0: np.ndarray,
     return support
 
 
-def load_stop(path: Path, bm) -> tuple[LastingSupport, dict]:
-    """A kept stop (``studies/stop_study.save``'s file at ``path``) of the model ``bm`` as the
-    ``LastingSupport`` it was, with its ``meta`` (the gait, the margins, the solve, date and commit);
-    its ``solution`` holds the unknowns ``x`` only."""
+def load_plan(path: Path, bm) -> tuple[LastingSupport, dict]:
+    """A kept stop or start (``studies/spline_study.save``'s file at ``path``; its ``meta`` says
+    which) of the model ``bm`` as the ``LastingSupport`` it was, with its ``meta`` (the gait, the
+    margins, the solve, date and commit); its ``solution`` holds the unknowns ``x`` only."""
     with np.load(path) as kept:
         arrays = {key: kept[key] for key in kept.files}
     meta = json.loads(str(arrays["meta"]))
@@ -302,9 +334,10 @@ def load_stop(path: Path, bm) -> tuple[LastingSupport, dict]:
     t, torques = arrays["t"], arrays["torques"]
     weights = _trapezoid(t)
     l1 = float(weights @ np.abs(torques).sum(axis=1))
+    none = np.zeros(torques.shape[1])
     support = LastingSupport(meta["duration"], meta["success"], meta["message"], t, embedded(arrays["q"]),
                              embedded(arrays["qd"]), embedded(arrays["qdd"]), torques, arrays["contact_forces"],
-                             arrays["i_minus"], np.zeros_like(arrays["i_minus"]), arrays["held_impulses"], l1,
+                             arrays.get("i_minus", none), arrays.get("i_plus", none), arrays["held_impulses"], l1,
                              float(weights @ (torques ** 2).sum(axis=1)), meta["effort_total"], meta["iterations"],
                              0.0, None, None, {"x": arrays["x"]}, None)
     return support, meta
