@@ -34,7 +34,8 @@ import numpy as np
 from ..core.dynamics.closed_chain import ClosedChain
 from ..core.gait.lasting import LastingRequest
 from ..core.gait.planner import GaitPlanner, GaitRequest
-from ..core.gait.spline_support import END_ROLL, KINDS, STAGES, SplineProgram, continuation, seed, spline_mesh
+from ..core.gait.spline_support import (END_ROLL, KINDS, STAGES, SplineProgram, continuation, seed, spline_mesh,
+                                        usable)
 from ..core.walking.balance import standing_pose
 
 DURATION = 2.0  # s: the shortest double support whose continuation reached the floor's mu within 200 N m
@@ -66,7 +67,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, required=True, help="the .npz file to write")
     parser.add_argument("--kind", choices=KINDS, default="stop", help="the phase (default: the stop)")
-    parser.add_argument("--from", dest="start", type=Path, help="a kept plan (.npz) to start the last solve from")
+    parser.add_argument("--from", dest="start", type=Path,
+                        help="a kept plan (.npz) of one of the stages to go on from (the last stage's: the last solve only)")
     parser.add_argument("--keep-stages", type=Path, help="a folder to write each stage's plan into")
     args = parser.parse_args(argv)
     kind = args.kind
@@ -98,12 +100,19 @@ def main(argv: list[str] | None = None) -> int:
         free = program(0.0, False)
         moving = collocation.xd[0 if kind == "stop" else -1, planner.model.ds_of_single]
         start = seed(free, boundary, lasting.program(kind, "l1").values(collocation.solution), moving)
-        support = continuation(free, boundary, start, STAGES, report)
-        if not support.success:
+        stages = STAGES
+    else:
+        with np.load(args.start) as kept:
+            start, meta = kept["x"], json.loads(str(kept["meta"]))
+        done = [k for k, stage in enumerate(STAGES)
+                if (stage.least_normal_force, stage.friction) == (meta["least_normal_force"], meta["friction"])]
+        stages = STAGES[done[0] + 1:] if done else ()
+        free = program(0.0, False) if stages else None
+    if stages:
+        support = continuation(free, boundary, start, stages, report)
+        if not usable(free, support):
             return 1
         start = support.solution["x"]
-    else:
-        start = np.load(args.start)["x"]
     final = continuation(program(END_ROLL, True), boundary, start, STAGES[-1:], report)
     save(args.out, final, planner.model.ds_of_single, GAIT, STAGES[-1], kind)
     return 0 if final.success else 1

@@ -723,10 +723,14 @@ class LastingProgram:
         spin_moments = None if self.lateral_free else (reactions[..., 3], held[:, 3])
         return reactions[..., :3], held[:, :3], spin_moments
 
+    def excess(self, solution: dict) -> np.ndarray:
+        """How far ``solution``'s iterate is outside each constraint's bounds (its rows' units)."""
+        g = np.asarray(solution["g"])
+        return np.maximum(self.lbg - g, 0.0) + np.maximum(g - self.ubg, 0.0)
+
     def _worst(self, solution: dict) -> str:
         """What the last iterate violates most, in the constraints' words and units."""
-        g = np.asarray(solution["g"])
-        excess = np.maximum(self.lbg - g, 0.0) + np.maximum(g - self.ubg, 0.0)
+        excess = self.excess(solution)
         worst = int(np.argmax(excess))
         return f"its last iterate misses '{self.row_names[worst]}' by {excess[worst]:.3g}"
 

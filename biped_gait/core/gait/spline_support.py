@@ -305,16 +305,24 @@ def seed(program: SplineProgram, boundary: Boundary, impulsive: dict[str, np.nda
 def continuation(program: SplineProgram, boundary: Boundary, x0: np.ndarray, stages=STAGES,
                  report=None) -> LastingSupport:
     """The phase at the last of ``stages``, each solved from the one before (the first from ``x0``);
-    the first stage that fails is returned as it is. ``report(stage, support)`` after each."""
+    the first stage that fails is returned as it is, unless its last iterate is feasible to
+    ``TOLERANCE`` (IPOPT's restoration can fail at such a point near the optimum: the next stage
+    goes on from it). ``report(stage, support)`` after each."""
     support = None
     for stage in stages:
         support = program.solve_stage(boundary, stage, x0)
         if report is not None:
             report(stage, support)
-        if not support.success:
+        if not usable(program, support):
             return support
         x0 = support.solution["x"]
     return support
+
+
+def usable(program: SplineProgram, support: LastingSupport) -> bool:
+    """Whether ``support`` (a solve of ``program``) can start the next stage: solved, or its last
+    iterate feasible to ``TOLERANCE``."""
+    return support.success or float(program.excess(support.solution).max()) <= TOLERANCE
 
 
 def load_plan(path: Path, bm) -> tuple[LastingSupport, dict]:

@@ -46,14 +46,14 @@ class HeldSupport(Tracking):
                    for _, q, qd, _, qdd, held in self.along())
 
 
-def held_support(chain: ClosedChain, support) -> HeldSupport:
+def held_support(chain: ClosedChain, support, horizon: bool = False) -> HeldSupport:
     """The walk's ``HeldSupport`` of the planned ``support`` (a solved ``LastingSupport`` with a
-    phase, d > 0)."""
+    phase, d > 0); ``horizon``: its feedback the finite-horizon LQR's (``tracking``)."""
     if not support.success or support.duration <= 0.0:
         raise ValueError("a double support to walk needs a solved phase of positive duration")
     at = chain.at
     plan = tracking(chain, support.t, support.x[:, at], support.xd[:, at], support.xdd[:, at], support.torques,
-                    HeldSupport, i_minus=support.i_minus)
+                    HeldSupport, horizon, i_minus=support.i_minus)
     least = plan.least_normal_force()
     if not least > 0.0:
         raise ValueError(f"the planned double support of {support.duration:g} s cannot be tracked: its reactions "

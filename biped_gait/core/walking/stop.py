@@ -1,8 +1,8 @@
 """The walk's stop, ready to walk (docs/model.md section 14.2): a stop planned from a gait's
 touchdown into the standing posture (``core/gait/spline_support.py``; the package keeps the default
 gait's, ``kept_stop_path``), with what the walk needs of it: the plan to track
-(``held_support.HeldSupport``, its feedback the finite-horizon LQR's, ``tracking.with_horizon``) and the balance controller that holds the posture it ends in
-(``balance``). ``Walker.stop`` walks it at the touchdown of a step aimed at its gait
+(``held_support.HeldSupport``, its feedback the finite-horizon LQR's, ``tracking``) and the
+balance controller that holds the posture it ends in (``balance``). ``Walker.stop`` walks it at the touchdown of a step aimed at its gait
 (``phases.stopping``).
 
 Units SI, rad.
@@ -22,7 +22,6 @@ from ..model.params import BipedParams, load_params
 from .balance import Balance, balance, standing_pose
 from .held_support import HeldSupport, held_support
 from .orbit import PlannedOrbit
-from .tracking import with_horizon
 
 SAME_GAIT = 1e-9  # m, s, rad: a gait this close to the stop's in L, T and alpha is the stop's (they are stored to 1e-16)
 # rad, rad/s: a step that starts this close to its gait's start (q0, qd_a) takes the stop. Its
@@ -84,5 +83,5 @@ def kept_stop(hybrid: HybridStep) -> WalkStop:
     chain = ClosedChain(hybrid.bm, hybrid.exchange)
     support, meta = load_plan(kept_stop_path(), hybrid.bm)
     pose = standing_pose(chain, meta["L"])
-    return WalkStop(with_params, meta["L"], meta["T"], meta["alpha"], meta["mode"], with_horizon(held_support(chain, support)),
+    return WalkStop(with_params, meta["L"], meta["T"], meta["alpha"], meta["mode"], held_support(chain, support, horizon=True),
                     balance(chain, pose))

@@ -15,8 +15,8 @@ and the torques
     Gamma = Gamma*(t) - K [N'(q - q*(t)); N'(qd - qd*(t))],
 
 each within its joint's effort limit. The gains are the LQR's of the dynamics frozen at each sample
-(the lasting walk's, d up to a few tenths of a second), or, for a phase that ends at rest
-(``with_horizon``: the stop, 2 s), the finite-horizon LQR of the linearized time-varying system: the
+(the lasting walk's, d up to a few tenths of a second), or, for a phase of seconds
+(``tracking(horizon=True)``: the stop, 2 s), the finite-horizon LQR of the linearized time-varying system: the
 samples' bases aligned to their predecessors' (orthogonal Procrustes, so that the minimal
 coordinates change smoothly), each interval's dynamics discretized exactly (zero-order hold of
 the torques), the discrete Riccati recursion run backwards from the frozen LQR's cost at the last
@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
@@ -111,50 +111,49 @@ class Tracking:
 
 
 def tracking(chain, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, torques: np.ndarray,
-             cls: type = Tracking, **extra) -> Tracking:
+             cls: type = Tracking, horizon: bool = False, **extra) -> Tracking:
     """The ``Tracking`` (or its subclass ``cls``, its further fields ``extra``) of the samples ``t``
     (s, from 0), ``q``, ``qd``, ``qdd`` and ``torques`` of a phase held by ``chain``: at each sample
-    the minimal basis and the LQR gain of the dynamics frozen there (module docstring)."""
+    the minimal basis and the dynamics linearized there, and the LQR gains of the dynamics frozen
+    at each sample, or with ``horizon`` (a phase of a second or more, the stop's and the start's)
+    the finite-horizon LQR's, the bases aligned (module docstring)."""
     limits = effort_limits(chain)
-    bases, gains = [], []
+    bases, systems = [], []
     for k in range(len(t)):
         basis = minimal_basis(chain, q[k])
-        a, b = linearization(chain, q[k], qd[k], torques[k], basis)
-        bases.append(basis)
-        gains.append(lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE))
-    t = np.asarray(t)
-    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), np.array(gains), limits, **extra)
-
-
-def with_horizon(plan: Tracking) -> Tracking:
-    """``plan`` (a phase that ends at rest) with the finite-horizon LQR's feedback (module
-    docstring): its samples' bases aligned, its gains from the discrete Riccati recursion run
-    backwards from the frozen LQR's cost at its last sample."""
-    chain, limits = plan.chain, plan.limits
-    bases, systems = [], []
-    for k in range(len(plan.t)):
-        basis = minimal_basis(chain, plan.q[k])
-        if bases:  # the nearest to the last basis that spans the same space
+        if horizon and bases:  # the nearest to the last basis that spans the same space
             u, _, vt = np.linalg.svd(basis.T @ bases[-1])
             basis = basis @ (u @ vt)
         bases.append(basis)
-        systems.append(linearization(chain, plan.q[k], plan.qd[k], plan.torques[k], basis))
+        systems.append(linearization(chain, q[k], qd[k], torques[k], basis))
+    if horizon:
+        gains = _horizon_gains(np.asarray(t), bases, systems, limits)
+    else:
+        gains = np.array([lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE) for a, b in systems])
+    t = np.asarray(t)
+    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), gains, limits, **extra)
+
+
+def _horizon_gains(t: np.ndarray, bases: list[np.ndarray], systems: list[tuple[np.ndarray, np.ndarray]],
+                   limits: np.ndarray) -> np.ndarray:
+    """The finite-horizon LQR's gains at the samples ``t`` (s) of the dynamics ``systems`` (A, B)
+    linearized in the aligned ``bases`` (module docstring): each interval discretized exactly, the
+    discrete Riccati recursion run backwards from the frozen LQR's cost at the last sample."""
     a, b = systems[-1]
     m, na = a.shape[0] // 2, b.shape[1]
     q_weight = np.diag(np.concatenate([np.full(m, 1 / POSITION_SCALE ** 2), np.full(m, 1 / RATE_SCALE ** 2)]))
     r_weight = np.diag(1.0 / (TORQUE_SCALE * limits) ** 2)
     cost = solve_continuous_are(a, b, q_weight, r_weight)
     steps = []
-    for k in range(len(plan.t) - 1):
-        h = plan.t[k + 1] - plan.t[k]
-        a, b = systems[k]
+    for k in range(len(t) - 1):
+        h = t[k + 1] - t[k]
+        a_k, b_k = systems[k]
         block = np.zeros((2 * m + na, 2 * m + na))
-        block[:2 * m, :2 * m], block[:2 * m, 2 * m:] = a, b
+        block[:2 * m, :2 * m], block[:2 * m, 2 * m:] = a_k, b_k
         held = expm(block * h)  # x(t + h) from x(t) and the torques held over h
         change = np.kron(np.eye(2), bases[k + 1].T @ bases[k])  # into the next sample's coordinates
         steps.append((change @ held[:2 * m, :2 * m], change @ held[:2 * m, 2 * m:], h))
-    gains = np.concatenate([riccati_gains(steps, q_weight, r_weight, cost), [np.linalg.solve(r_weight, b.T @ cost)]])
-    return replace(plan, basis=np.array(bases), gain=gains)
+    return np.concatenate([riccati_gains(steps, q_weight, r_weight, cost), [np.linalg.solve(r_weight, b.T @ cost)]])
 
 
 def riccati_gains(steps: list[tuple[np.ndarray, np.ndarray, float]], weight: np.ndarray, effort: np.ndarray,
