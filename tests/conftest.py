@@ -117,7 +117,7 @@ LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "t
                  "test_simulator_turning", "test_actuated_ros", "test_doc_examples", "test_lasting",
                  "test_actuated_swing", "test_faults_inputs", "test_simulator_lasting", "test_standing",
                  "test_simulator_standing", "test_simulator_walking", "test_walking_page", "test_simulator_start_stop",
-                 "test_dask", "test_lasting_walk", "test_spline_stop", "test_turning", "test_hips_speeds", "test_sim_time", "test_atlas",
+                 "test_dask", "test_lasting_walk", "test_spline_support", "test_turning", "test_hips_speeds", "test_sim_time", "test_atlas",
                  "test_conversions", "test_simulator_node", "test_replay", "test_launch", "test_analyze", "test_sweep",
                  "test_optimize", "test_walk", "test_cli", "test_speed", "test_reference_figures",
                  "test_effort_options")

@@ -111,6 +111,8 @@ from ..core.walking.held_support import lasting_orbit
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.runner import prepare_walking
 from ..core.walking.swing_ends import actuated_orbit
+from ..core.walking.balance import STANCE_LENGTH
+from ..core.walking.kept import kept_gait
 from ..core.walking.walk import ENGINES, INITIAL_STATES, PULSE_DURATION, Walk, check_initial_state
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
@@ -599,6 +601,14 @@ class SimulatorNode(Node):
         finally:
             self.pushes.stop("the walk ended")
 
+    def _stance_length(self, orbit: PlannedOrbit) -> float:
+        """The standing posture's stance length (m): the kept start's where the hybrid engine can start
+        onto ``orbit`` with it, else the balance's default (docs/model.md section 13)."""
+        start = kept_gait("start")
+        if self.value["engine"] == "hybrid" and start is not None and not start.why_not(orbit):
+            return start.step_length
+        return STANCE_LENGTH
+
     def _walk_once(self, orbit: tuple[PlannedOrbit, ...], start_ns: int, pacer: Pacer) -> bool:
         """One walk of ``orbit`` from its start, at simulated time ``iterations / rate`` after
         ``start_ns`` (ns); True if it ended (finished or fell, or could not start), False if
@@ -608,7 +618,8 @@ class SimulatorNode(Node):
         walk = Walk(orbit, self.rate, self.steps, reaim=self.value["reaim"],
                     momentum_rate=self.value["momentum_rate"] if steer else None, before_step=self._before_step,
                     engine=self.value["engine"], pulse_duration=self.value["pulse_duration"],
-                    initial_state=self.value["initial_state"], stand_duration=self.value["stand_duration"])
+                    initial_state=self.value["initial_state"], stand_duration=self.value["stand_duration"],
+                    stance_length=self._stance_length(orbit[0]))
         if walk.world is not None and self._messages is None:
             self._messages = SampleMessages(walk.world.joints.names, walk.world.link_frames)
         if walk.model is not None:

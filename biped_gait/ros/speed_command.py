@@ -14,8 +14,8 @@ once).
 
 linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop. **Where a stop is kept** (the
 hybrid engine's walk of the default parameter set, started on the gait the package keeps a stop
-of, ``core/walking/stop.py``, made ready in a thread when the walk starts): the walk stops at the
-touchdown of the next step that aims at that gait and starts within ``stop.SETTLED`` of its start
+of, ``core/walking/kept.py``, made ready in a thread when the walk starts): the walk stops at the
+touchdown of the next step that aims at that gait and starts within ``kept.SETTLED`` of its start
 (``Walker.stop``: the stop's 2 s of double support, then standing, docs/model.md section 14.2; a
 walk still settling after a push walks on, said once, its error falling fourfold a step); from
 another gait it is first walked back to that gait's speed, then aimed at the gait itself (one
@@ -60,7 +60,7 @@ from ..core.model.biped import BipedModel
 from ..core.model.params import BipedParams, load_params
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
-from ..core.walking.stop import Unsettled, WalkStop, kept_stop
+from ..core.walking.kept import KeptPlan, Unsettled, kept_gait, kept_plan
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.runner import Walker
@@ -94,11 +94,14 @@ class SpeedCommand:
         self._said_ignored: set[str] = set()
         self._explained: set[tuple[str, float, float]] = set()  # the walk's starts and stops planned: (kind, L, T)
         self._stop_asked = False  # the last command asks the walk to stop
-        self._stop: WalkStop | None = None  # the kept stop of the walk's gait, once made ready (start)
+        self._stop: KeptPlan | None = None  # the kept stop of the walk's gait, once made ready (start)
         self._stop_gait: PlannedOrbit | None = None  # the gait it stops from: the walk's first
         self._stop_home = False  # the follower has been sent back to the stop's gait's speed
         self._stop_waits = False  # said that the stop waits for the walk to settle on its gait
-        self._preparing: threading.Thread | None = None  # making the kept stop ready (start), until joined
+        self._preparing: threading.Thread | None = None  # making the kept stop (and start) ready, until joined
+        self._start: KeptPlan | None = None  # the kept start onto the standing walk's gait, once made ready
+        self._start_asked: tuple[float, float] | None = None  # the command that asks the standing walk to start
+        self._source: str | None = None  # the walk's parameter set as given
         self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
         self._ended = False  # the walk ended: commands are ignored until the next starts
         self._grid = DEFAULTS.walk_steps
@@ -115,24 +118,34 @@ class SpeedCommand:
               stoppable: bool = False) -> None:
         """Make the follower of ``walker``'s gait (``source``: its parameter set as given), and
         publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time); with
-        ``standing``, the walker stands: commands are refused; ``stoppable``: the walk can take a
-        kept stop (the hybrid engine's paper walk), made ready in a thread (module docstring)."""
+        ``standing``, the walker stands: a command to walk starts it where a start is kept for its
+        gait (made ready in a thread), else is refused; ``stoppable``: the walk can take a kept stop
+        and start (the hybrid engine's paper walk), made ready in a thread (module docstring)."""
         self._last, self._lapsed, self._stop_asked, self._stop_home, self._stop_waits = None, False, False, False, False
         with self._lock:
             self._walk, self._ended = self._walk + 1, False
             self._explained.clear()
             self._stop, self._stop_gait, self._preparing = None, None, None
-        if stoppable and not standing:
-            self._preparing = self._prepare_stop(walker.orbit, source)
+            self._start, self._start_asked, self._source = None, None, source
+        startable = standing and stoppable and kept_gait("start") is not None and not kept_gait("start").why_not(walker.orbit)
+        if stoppable:
+            self._preparing = self._prepare(walker.orbit, source, startable)
         if standing:
             with self._lock:
                 self.follower, self._standing, pending = None, walker, self._pending
                 self._grid = walker.grid
-            self.node.get_logger().info("speed command: the robot stands; a command to walk is refused until a "
-                                        "start from standing is possible")
+            self.node.get_logger().info(
+                "speed command: the robot stands; a command to walk starts it onto its gait (the kept start)" if startable
+                else "speed command: the robot stands; a command to walk is refused (no start is kept for its gait)")
             if pending is not None:
                 self._command(*pending)
             return
+        self._follow(walker, stamp_ns)
+
+    def _follow(self, walker: Walker, stamp_ns: int) -> None:
+        """Make the follower of ``walker``'s gait and publish its envelope stamped ``stamp_ns`` (ns);
+        a command that came before is walked then."""
+        source = self._source
         follower, note = follower_for(walker, DEFAULTS, self.rule, self.max_change, source, self.max_curvature,
                                       self.max_curvature_change)
         if note:
@@ -141,7 +154,7 @@ class SpeedCommand:
         self.pub_envelope.publish(envelope_msg(follower.envelope, follower.rule.describe(), stamp_msg(stamp_ns)),
                                   stamp_ns)
         with self._lock:
-            self.follower, self._standing, pending = follower, None, self._pending
+            self.follower, self._standing, pending, self._pending = follower, None, self._pending, None
             self._grid = walker.grid
         if pending is not None:
             self._command(*pending)
@@ -153,21 +166,29 @@ class SpeedCommand:
             self.follower, self._standing, self._pending = None, None, None
             self._walk, self._ended = self._walk + 1, True
 
-    def _prepare_stop(self, gait: PlannedOrbit, source: str | None) -> threading.Thread:
-        """The thread that makes the kept stop of ``gait`` ready, on a model of its own (Pinocchio's
-        data are the walk thread's); none if the package keeps no stop of that gait."""
+    def _prepare(self, gait: PlannedOrbit, source: str | None, startable: bool) -> threading.Thread:
+        """The thread that makes the kept stop of ``gait`` ready, and with ``startable`` its kept start,
+        on a model of its own (Pinocchio's data are the walk thread's); none if the package keeps none
+        of that gait."""
         walk = self._walk
 
         def prepare() -> None:
-            try:
-                stop = kept_stop(HybridStep(BipedModel.from_params(load_params(source))))
-            except ValueError:  # no stop kept for these parameters
-                return
-            if stop.why_not(gait):
-                return
-            with self._lock:
-                if self._walk == walk:
-                    self._stop, self._stop_gait = stop, gait
+            hybrid = None
+            for kind in ("start", "stop") if startable else ("stop",):
+                try:
+                    hybrid = hybrid or HybridStep(BipedModel.from_params(load_params(source)))
+                    plan = kept_plan(hybrid, kind)
+                except ValueError:  # none kept for these parameters
+                    return
+                if plan.why_not(gait):
+                    continue
+                with self._lock:
+                    if self._walk != walk:
+                        return
+                    if kind == "start":
+                        self._start = plan
+                    else:
+                        self._stop, self._stop_gait = plan, gait
 
         thread = threading.Thread(target=prepare, name="stop-prepare", daemon=True)
         thread.start()
@@ -199,6 +220,10 @@ class SpeedCommand:
     def _command(self, speed: float, yaw_rate: float) -> None:
         standing = self._standing
         if standing is not None:
+            if self._preparing is not None or self._start is not None:  # a start kept: taken before the next phase
+                with self._lock:
+                    self._start_asked = (speed, yaw_rate) if speed >= STOP_SPEED else None
+                return
             if abs(speed) >= STOP_SPEED or yaw_rate:
                 self._explain("start", standing.orbit, standing.bm.params,
                               f"speed command {speed:g} m/s, {yaw_rate:g} rad/s refused while standing: cannot start "
@@ -247,7 +272,11 @@ class SpeedCommand:
 
     def before_step(self, walker: Walker) -> None:
         """One transition towards the commanded speed and turn, if the walker is not at them, the
-        timeout's 0 first if no command came for that long (walker thread)."""
+        timeout's 0 first if no command came for that long (walker thread); while standing, the start
+        that a command asked for."""
+        if self._standing is not None and self._start_asked is not None:
+            self._started(walker)
+            return
         follower = self.follower
         if follower is None:
             return
@@ -279,6 +308,32 @@ class SpeedCommand:
                 follower.speed - follower.commanded) < 1e-9:  # at the slowest gait, straight: the gait that walks
             self._explain("stop", follower.orbit, follower.bm.params, "speed command: cannot stop from",
                           "walking on at the slowest gait")
+
+    def _started(self, walker: Walker) -> None:
+        """Start the standing walk onto its gait (the kept start, once ready), then follow the command
+        that asked for it (module docstring)."""
+        logger = self.node.get_logger()
+        if self._preparing is not None:
+            self._preparing.join()
+            self._preparing = None
+        with self._lock:
+            start, (speed, yaw_rate) = self._start, self._start_asked
+            self._start_asked = None
+        if start is None:
+            self._explain("start", walker.orbit, walker.bm.params, "speed command: cannot start from standing onto",
+                          "standing on")
+            return
+        try:
+            walker.start(start)
+        except ValueError as exc:
+            logger.warn(f"speed command: {exc}; standing on")
+            return
+        logger.info(f"speed command: {speed:g} m/s: starting onto the gait L = {start.step_length:g} m, T = "
+                    f"{start.period:g} s (the kept start: {start.plan.duration:g} s with both feet down, then I^+), "
+                    "then following the command")
+        with self._lock:
+            self._standing, self._pending = None, (speed, yaw_rate)
+        self._follow(walker, self._now_ns())
 
     def _stopped(self, walker: Walker, follower: SpeedFollower) -> bool:
         """Towards the kept stop (module docstring): stop at this step's touchdown if it aims at the

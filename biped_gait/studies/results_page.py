@@ -4,7 +4,7 @@ claims checked on the computed numbers, and where the project and the paper diff
 written from the computed evidence; then the maps of where walking is possible and the walk
 beyond the paper (stability, pushes, commanded speed: ``walking_page``), and the double support
 that lasts and the actuated swing, read from their stored studies beside the page (``lasting_page``,
-``actuated_page``), and the stop the package keeps (``stop_page``).
+``actuated_page``), and the stop and the start the package keeps (``spline_page``).
 
 Everything on the page is computed when it is generated (``biped-gait results-page``); only
 the paper's own numbers are constants here. W in N m s, angular momentum in kg m^2/s,
@@ -36,7 +36,7 @@ from .stability_study import PointStability, point_stability, stability_lines
 from .hips_page import HIPS_PARAMS, hips_lines, hips_study
 from .actuated_page import (ACTUATED_FIGURE, ACTUATED_STUDY, HEADING as ACTUATED_HEADING, ActuatedStudy,
                             actuated_figure, actuated_lines)
-from .stop_page import HEADING as STOP_HEADING, STOP_FIGURE, kept_stop_plan, stop_figure, stop_lines
+from .spline_page import FIGURES as SPLINE_FIGURES, HEADINGS as SPLINE_HEADINGS, kept_plans, section_figure, section_lines
 from .lasting_page import HEADING as LASTING_HEADING, LASTING_STUDY, LastingStudy, lasting_figures, lasting_lines
 from .mujoco_pulses import DURATIONS as PULSE_DURATIONS, PulseRow, pulse_lines, pulse_rows
 from .turning_page import FIGURE as TURNING_FIGURE, Turning, turning_figure, turning_lines, turning_study
@@ -382,7 +382,7 @@ class Extensions:
     lasting_path: Path | None = None  # where the lasting study was looked for (None: no such section)
     actuated: ActuatedStudy | None = None
     actuated_path: Path | None = None  # where the actuated swing's study was looked for (None: no such section)
-    stop: tuple | None = None  # the kept stop (``stop_page.kept_stop_plan``; None: no such section)
+    spline: dict | None = None  # the kept stop and start by kind (``spline_page.kept_plans``; None: no such sections)
 
 
 STABILITY_FIGURE = "stability.png"
@@ -457,9 +457,9 @@ def render(
     if extensions.actuated_path is not None:
         lines += ["", ACTUATED_HEADING, ""]
         lines += actuated_lines(extensions.actuated, extensions.actuated_path)
-    if extensions.stop is not None:
-        lines += ["", STOP_HEADING, ""]
-        lines += stop_lines(*extensions.stop)
+    for kind, plan in (extensions.spline or {}).items():
+        lines += ["", SPLINE_HEADINGS[kind], ""]
+        lines += section_lines(kind, *plan)
     if extensions.pulses:
         lines += ["", "## A double support that lasts, walked in MuJoCo (beyond the paper)", "",
                   "The paper's caveat: impulsive torques cannot be realized. In MuJoCo (`engine:=mujoco`, docs/model.md "
@@ -529,10 +529,12 @@ def write_results_page(out: Path, executor: Executor, coarse_step: float = COARS
     lasting = LastingStudy.load(lasting_path) if lasting_path.is_file() else None
     actuated_path = out.parent / ACTUATED_STUDY
     actuated = ActuatedStudy.load(actuated_path) if actuated_path.is_file() else None
-    stop = kept_stop_plan()
+    spline = kept_plans()
     extensions = replace(extensions, lasting=lasting, lasting_path=lasting_path, actuated=actuated,
-                         actuated_path=actuated_path, stop=stop)
-    figures["The stop: joint angles, torques and the feet's reactions"] = (stop_figure(*stop), STOP_FIGURE)
+                         actuated_path=actuated_path, spline=spline)
+    for kind, plan in spline.items():
+        figures[f"The {kind}: joint angles, torques and the feet's reactions"] = (section_figure(kind, *plan),
+                                                                                 SPLINE_FIGURES[kind])
     figures.update(lasting_figures(lasting))
     if actuated is not None:
         figures["The actuated swing: E against tau and against alpha"] = (actuated_figure(actuated), ACTUATED_FIGURE)

@@ -67,9 +67,10 @@ NEAR_START = {"ipopt.bound_push": 1e-8, "ipopt.bound_frac": 1e-8, "ipopt.mu_init
               "ipopt.acceptable_constr_viol_tol": TOLERANCE, "ipopt.acceptable_iter": 10}
 
 
-def kept_stop_path() -> Path:
-    """The package's kept stop of the default gait (``studies/spline_study.py`` writes it)."""
-    return Path(str(resources.files("biped_gait.core.data"))) / "stop" / "aoustin2013-default.npz"
+def kept_path(kind: str = "stop") -> Path:
+    """The package's kept stop or start (``kind``) of the default gait (``studies/spline_study.py``
+    writes them)."""
+    return Path(str(resources.files("biped_gait.core.data"))) / kind / "aoustin2013-default.npz"
 
 
 @dataclass(frozen=True)

@@ -19,9 +19,11 @@ SINGLE_SUPPORT = "single_support"
 DOUBLE_SUPPORT = "double_support"
 STANDING = "standing"
 STOPPING = "stopping"
-PHASE_KINDS = (SINGLE_SUPPORT, DOUBLE_SUPPORT, STANDING, STOPPING)
+STARTING = "starting"
+PHASE_KINDS = (SINGLE_SUPPORT, DOUBLE_SUPPORT, STANDING, STOPPING, STARTING)
 """What a phase is to a user (the gait phase topic): one foot on the ground, both while the robot
-walks, both while it stands, both while it comes to rest from a walk."""
+walks, both while it stands, both while it comes to rest from a walk, both while it sets off from
+standing."""
 
 
 class Fall(Exception):

@@ -26,7 +26,7 @@ from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import DEFAULTS, Settings
 from .orbit import PlannedOrbit
-from .tracking import Tracking, tracking
+from .tracking import Tracking, tracking, tracking_with_horizon
 
 
 @dataclass(frozen=True, eq=False)
@@ -48,12 +48,13 @@ class HeldSupport(Tracking):
 
 def held_support(chain: ClosedChain, support, horizon: bool = False) -> HeldSupport:
     """The walk's ``HeldSupport`` of the planned ``support`` (a solved ``LastingSupport`` with a
-    phase, d > 0); ``horizon``: its feedback the finite-horizon LQR's (``tracking``)."""
+    phase, d > 0); ``horizon``: its feedback the finite-horizon LQR's (``tracking_with_horizon``)."""
     if not support.success or support.duration <= 0.0:
         raise ValueError("a double support to walk needs a solved phase of positive duration")
     at = chain.at
-    plan = tracking(chain, support.t, support.x[:, at], support.xd[:, at], support.xdd[:, at], support.torques,
-                    HeldSupport, horizon, i_minus=support.i_minus)
+    track = tracking_with_horizon if horizon else tracking
+    plan = track(chain, support.t, support.x[:, at], support.xd[:, at], support.xdd[:, at], support.torques,
+                 HeldSupport, i_minus=support.i_minus)
     least = plan.least_normal_force()
     if not least > 0.0:
         raise ValueError(f"the planned double support of {support.duration:g} s cannot be tracked: its reactions "

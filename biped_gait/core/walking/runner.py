@@ -38,10 +38,11 @@ from .orbit import Cycle, PlannedOrbit, as_cycle
 from .phases.impulsive import SingleSupport
 from .phases.phase import AFTER, AT, TIME_TOLERANCE, TOUCHDOWN, End, Phase, WalkContext
 from .phases.standing import Standing
+from .phases.starting import starting
 from .phases.stopping import StopTouchdown
 from .push import AppliedPush, Push, TrunkPush
 from .state import WalkState
-from .stop import SETTLED, Unsettled, WalkStop, unsettled
+from .kept import SETTLED, KeptPlan, Unsettled, unsettled
 
 LINKS_CHECKED_AFTER = 0.05  # of the aimed period: a link below the ground is a fall from then on (not at the toe-off)
 SLIP_LIMIT = LIFT_LIMIT = 1e-3
@@ -140,12 +141,12 @@ class Walker:
             raise ValueError("cannot walk a plan that did not converge")
         self.state = replace(self.state, aim=self.state.aim.retargeted(cycle))
 
-    def stop(self, stop: WalkStop) -> None:
+    def stop(self, stop: KeptPlan) -> None:
         """End the walk standing: the current step's touchdown goes onto ``stop``'s double support
         and from its end the robot stands (``phases.stopping``). ``ValueError`` with the reason if
         the current step cannot: it is under way or not a ballistic single support (the MuJoCo
         walk's), it aims at another gait than the stop's, another gait is to be aimed at next, or it
-        starts farther from its gait's start than ``stop.SETTLED`` (``stop.Unsettled``: a walk still
+        starts farther from its gait's start than ``kept.SETTLED`` (``kept.Unsettled``: a walk still
         settling after a push, a few steps more)."""
         phase, aim, s = self.phase, self.state.aim, self.state
         if type(phase) is not SingleSupport or s.t_step > 0.0:
@@ -159,6 +160,24 @@ class Walker:
             raise Unsettled(f"cannot stop at this step: the step starts {off:.2g} off its gait's start, more than the "
                             f"{SETTLED:g} it stops from")
         self.phase = SingleSupport(StopTouchdown(stop.plan, Standing(stop.balance)))
+
+    def start(self, start: KeptPlan) -> None:
+        """Set off from standing onto the walk's gait: the start's double support from now, then I^+
+        onto the gait's next step and its single support (``phases.starting``). ``ValueError`` with
+        the reason if the walk is not standing, ``start`` is not planned with the gait it is aimed
+        at (or another gait is to be aimed at next), or it stands farther than ``kept.SETTLED`` from
+        the start's posture at rest (``kept.Unsettled``)."""
+        s = self.state
+        if not isinstance(self.phase, Standing):
+            raise ValueError("a start begins from standing")
+        why = start.why_not(s.aim.orbit) or ("the walk is aimed at another gait" if s.aim.pending is not None else "")
+        if why:
+            raise ValueError(f"cannot start: {why}")
+        phase = starting(start.plan, s)
+        if phase.report.state_error > SETTLED:
+            raise Unsettled(f"cannot start: the robot stands {phase.report.state_error:.2g} off the start's posture at "
+                            f"rest, more than the {SETTLED:g} it starts from")
+        self.phase = phase
 
     def shove(self, delta_qd: np.ndarray) -> None:
         """Add ``delta_qd`` (rad/s, model coordinates) to the velocity the current phase starts with."""

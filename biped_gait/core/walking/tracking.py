@@ -16,7 +16,7 @@ and the torques
 
 each within its joint's effort limit. The gains are the LQR's of the dynamics frozen at each sample
 (the lasting walk's, d up to a few tenths of a second), or, for a phase of seconds
-(``tracking(horizon=True)``: the stop, 2 s), the finite-horizon LQR of the linearized time-varying system: the
+(``tracking_with_horizon``: the stop and the start, 2 s), the finite-horizon LQR of the linearized time-varying system: the
 samples' bases aligned to their predecessors' (orthogonal Procrustes, so that the minimal
 coordinates change smoothly), each interval's dynamics discretized exactly (zero-order hold of
 the torques), the discrete Riccati recursion run backwards from the frozen LQR's cost at the last
@@ -111,27 +111,40 @@ class Tracking:
 
 
 def tracking(chain, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, torques: np.ndarray,
-             cls: type = Tracking, horizon: bool = False, **extra) -> Tracking:
+             cls: type = Tracking, **extra) -> Tracking:
     """The ``Tracking`` (or its subclass ``cls``, its further fields ``extra``) of the samples ``t``
     (s, from 0), ``q``, ``qd``, ``qdd`` and ``torques`` of a phase held by ``chain``: at each sample
-    the minimal basis and the dynamics linearized there, and the LQR gains of the dynamics frozen
-    at each sample, or with ``horizon`` (a phase of a second or more, the stop's and the start's)
-    the finite-horizon LQR's, the bases aligned (module docstring)."""
+    the minimal basis and the LQR gain of the dynamics frozen there (module docstring)."""
     limits = effort_limits(chain)
+    bases, systems = _linearized(chain, q, qd, torques, aligned=False)
+    gains = np.array([lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE) for a, b in systems])
+    t = np.asarray(t)
+    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), gains, limits, **extra)
+
+
+def tracking_with_horizon(chain, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray,
+                          torques: np.ndarray, cls: type = Tracking, **extra) -> Tracking:
+    """As ``tracking``, for a phase of a second or more (the stop's and the start's): the gains the
+    finite-horizon LQR's, the samples' bases aligned (module docstring)."""
+    limits = effort_limits(chain)
+    bases, systems = _linearized(chain, q, qd, torques, aligned=True)
+    t = np.asarray(t)
+    gains = _horizon_gains(t, bases, systems, limits)
+    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), gains, limits, **extra)
+
+
+def _linearized(chain, q: np.ndarray, qd: np.ndarray, torques: np.ndarray, aligned: bool) -> tuple[list, list]:
+    """At each sample the minimal basis (``aligned``: the nearest to the last one that spans the same
+    space, orthogonal Procrustes) and the dynamics (A, B) linearized there in it."""
     bases, systems = [], []
-    for k in range(len(t)):
+    for k in range(len(q)):
         basis = minimal_basis(chain, q[k])
-        if horizon and bases:  # the nearest to the last basis that spans the same space
+        if aligned and bases:
             u, _, vt = np.linalg.svd(basis.T @ bases[-1])
             basis = basis @ (u @ vt)
         bases.append(basis)
         systems.append(linearization(chain, q[k], qd[k], torques[k], basis))
-    if horizon:
-        gains = _horizon_gains(np.asarray(t), bases, systems, limits)
-    else:
-        gains = np.array([lqr_gain(a, b, limits, POSITION_SCALE, RATE_SCALE) for a, b in systems])
-    t = np.asarray(t)
-    return cls(chain, float(t[-1]), t, q, qd, qdd, torques, t, np.array(bases), gains, limits, **extra)
+    return bases, systems
 
 
 def _horizon_gains(t: np.ndarray, bases: list[np.ndarray], systems: list[tuple[np.ndarray, np.ndarray]],

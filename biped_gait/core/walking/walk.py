@@ -23,7 +23,7 @@ from ..dynamics.hybrid import HybridStep
 from ..dynamics.settings import DEFAULTS, Settings
 from ..model.biped import BipedModel
 from ..model.params import load_params
-from .balance import balance, standing_pose
+from .balance import STANCE_LENGTH, balance, standing_pose
 from .events import CouldNotStart, Fell, Finished, Sample, StepSamples, Touchdown
 from .orbit import Cycle, PlannedOrbit, as_cycle
 from .phases.actuated import ActuatedStart
@@ -41,8 +41,8 @@ with the paper's impulsive double supports; ``mujoco``, MuJoCo on the exported s
 PULSE_DURATION = 5e-3  # s: the double support's duration d with the MuJoCo engine
 INITIAL_STATES = ("walking", "standing")
 """How a walk begins: ``walking``, on the gait's orbit at the start of a step; ``standing``, at rest
-with both feet down, held by the balance controller (``phases.standing``) until the walk ends: a
-start from standing onto the gait is not possible yet (``start_stop``, docs/model.md section 8.10)."""
+with both feet down, held by the balance controller (``phases.standing``) until the walk ends or a
+start sets it off (``Walker.start``, the kept start of the default gait: docs/model.md section 14.3)."""
 
 
 def check_initial_state(initial_state: str, engine: str) -> None:
@@ -69,14 +69,16 @@ class Walk:
     to the end of the standing phase that reaches it, 0 meaning never; ``steps`` is not used, a
     standing robot making none). A walk that ``before_step`` stops (``Walker.stop``) stands from the
     stop's end for ``stand_duration`` s, or for ever; ``before_step`` is called before each standing
-    phase as before each step.
+    phase as before each step, and a walk that it starts (``Walker.start``) walks on from the start's
+    lift-off. ``stance_length`` (m): the standing posture's, the front foot ahead of the back one (a
+    start begins from the posture at its gait's step length).
     """
 
     def __init__(self, orbit: PlannedOrbit | Cycle, rate: float, steps: int = 0, reaim: bool = True,
                  settings: Settings = DEFAULTS, momentum_rate: float | None = None,
                  before_step: Callable[[Walker], object] | None = None, engine: str = "hybrid",
                  pulse_duration: float = PULSE_DURATION, initial_state: str = INITIAL_STATES[0],
-                 stand_duration: float = 0.0) -> None:
+                 stand_duration: float = 0.0, stance_length: float = STANCE_LENGTH) -> None:
         check_initial_state(initial_state, engine)
         if not rate > 0:
             raise ValueError(f"publishing rate must be positive, got {rate}")
@@ -122,7 +124,7 @@ class Walk:
         if self.standing:
             chain = ClosedChain(self.model, hybrid.exchange)
             try:
-                first = Standing(balance(chain, standing_pose(chain)))
+                first = Standing(balance(chain, standing_pose(chain, stance_length)))
             except ValueError as exc:  # BalanceError: the posture cannot be held
                 self.problem = str(exc)
                 return

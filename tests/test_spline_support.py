@@ -1,7 +1,8 @@
-"""The stop as a B-spline (core/gait/spline_support.py, docs/model.md section 14): its mesh, the kept
-stop of the default gait checked against the model's own dynamics (not the program's), and that
-stop walked by the walker (``Walker.stop``) from a touchdown of the gait into standing, in the
-hybrid engine."""
+"""The stop and the start as B-splines (core/gait/spline_support.py, docs/model.md section 14): their
+meshes, the kept stop and start of the default gait checked against the model's own dynamics (not
+the program's), the stop walked by the walker (``Walker.stop``) from a touchdown of the gait into
+standing, and the start (``Walker.start``) from standing onto the gait, its steps, and the stop
+again, in the hybrid engine."""
 
 from __future__ import annotations
 
@@ -16,16 +17,17 @@ from biped_gait.core.dynamics.closed_chain import ClosedChain
 from biped_gait.core.gait.planner import GaitPlanner, GaitRequest
 from biped_gait.core.gait.lasting import LastingRequest
 from biped_gait.core.gait.spline_support import (FIRST_INTERVAL, LONGEST_INTERVAL, SAMPLE_STEP, SplineProgram,
-                                                 kept_stop_path, load_plan, seed, spline_mesh)
+                                                 kept_path, load_plan, seed, spline_mesh)
 from biped_gait.core.walking.balance import standing_pose
-from biped_gait.core.walking.events import STANDING as STANDING_PHASE, STOPPING, Finished, StepSamples, Touchdown
+from biped_gait.core.walking.events import (STANDING as STANDING_PHASE, STARTING, STOPPING, Finished, StepSamples,
+                                           Touchdown)
 from biped_gait.core.walking.orbit import PlannedOrbit
 from biped_gait.core.walking.phases.standing import Standing
 from biped_gait.core.walking.phases.stopping import StopTouchdown
 from biped_gait.core.walking.runner import Walker
 from biped_gait.core.walking.push import AppliedPush, Push
 from biped_gait.core.walking.steering import DEFAULT_RATE
-from biped_gait.core.walking.stop import SETTLED, kept_stop
+from biped_gait.core.walking.kept import SETTLED, Unsettled, kept_plan
 from biped_gait.core.walking.walk import Walk
 
 # What the kept plan holds, and how well: IPOPT's constraint tolerance is 1e-6 (N, N m, rad) on
@@ -41,7 +43,7 @@ STILL = 1e-3  # m/s: ... the pelvis's speed under this over its last 2 s (the st
 @pytest.fixture(scope="module")
 def kept():
     planner = GaitPlanner(modes=("normal",))
-    support, meta = load_plan(kept_stop_path(), planner.model)
+    support, meta = load_plan(kept_path(), planner.model)
     gait = planner.plan(GaitRequest(meta["L"], meta["T"], meta["alpha"]))
     chain = ClosedChain(planner.model, planner.hybrid.exchange)
     pose = standing_pose(chain, meta["L"])
@@ -108,10 +110,30 @@ def test_the_kept_stop_starts_at_the_gaits_held_touchdown_and_ends_at_rest(kept)
     assert np.abs(support.xd[-1]).max() < VELOCITY and np.abs(support.xdd[-1]).max() < ROWS
 
 
+@pytest.fixture(scope="module")
+def kept_start(kept):
+    planner = kept[0]
+    support, meta = load_plan(kept_path("start"), planner.model)
+    return support, meta
+
+
 def test_the_kept_stop_holds_the_chains_dynamics_and_the_floors_margins(kept):
     planner, gait, chain, pose, support, meta = kept
+    check_dynamics(planner, chain, support, meta, spline_mesh(support.duration))
+
+
+def test_the_kept_start_holds_the_chains_dynamics_and_the_floors_margins(kept, kept_start):
+    planner, gait, chain, pose, _, _ = kept
+    support, meta = kept_start
+    assert meta["kind"] == "start"
+    check_dynamics(planner, chain, support, meta, spline_mesh(support.duration, kind="start"))
+
+
+def check_dynamics(planner, chain, support, meta, mesh) -> None:
+    """The plan ``support`` against the model (module docstring): the closed chain's equations of
+    motion at every sample (Pinocchio's RNEA), the joint table's torques and ranges, the margins of
+    ``meta``, the new tip held."""
     bm, at = planner.model, chain.at
-    mesh = spline_mesh(support.duration)
     assert np.allclose(support.t, mesh.samples * support.duration, atol=1e-12)
     residual = []
     for q, qd, qdd, torque, force in zip(support.x[:, at], support.xd[:, at], support.xdd[:, at],
@@ -135,10 +157,44 @@ def test_the_kept_stop_holds_the_chains_dynamics_and_the_floors_margins(kept):
     assert np.abs(tip - tip[0])[:, [0, 2]].max() < 1e-4  # held at the closure points, within 0.1 mm between
 
 
+def test_the_start_mesh_is_the_stops_reversed():
+    d = 2.0
+    stop, start = spline_mesh(d, 0.1), spline_mesh(d, 0.1, "start")
+    assert np.allclose(start.knots, 1.0 - stop.knots[::-1], atol=1e-15)
+    assert np.allclose(start.samples, 1.0 - stop.samples[::-1], atol=1e-12)
+    assert len(start.closure) == start.control_points - 4  # three end conditions at s = 0, one at s = 1
+    assert not start.roll[0] and start.roll[-1]  # at rest at s = 0 the rest rows imply it
+    with pytest.raises(ValueError, match="one of stop, start"):
+        spline_mesh(d, 0.1, "walk")
+
+
+def test_the_kept_start_begins_at_rest_and_launches_onto_the_gait(kept, kept_start):
+    """From rest in the standing posture to the gait's touchdown posture with the new tip at rest;
+    then I^+ with the new tip held takes the lift-off velocity to the gait's next start Xd^a (the
+    paper's eq. 10 with the model's mass matrix and the tip's Jacobian), its impulse pressing."""
+    planner, gait, chain, pose, _, _ = kept
+    support, meta = kept_start
+    boundary = planner.lasting.boundary(gait, pose.q)
+    at, bm = chain.at, planner.model
+    assert meta["success"] and support.duration == pytest.approx(2.0)
+    assert np.abs(support.x[0, at] - pose.q).max() < VELOCITY
+    assert np.abs(support.xd[0]).max() < VELOCITY and np.abs(support.xdd[0]).max() < ROWS
+    assert np.abs(support.x[-1, at] - boundary.q_t).max() < VELOCITY
+    lift_off = support.xd[-1]
+    assert np.abs(chain.rows_of(boundary.q_t) @ lift_off[at]).max() < VELOCITY  # the new tip at rest
+    d = bm.mass_matrix(boundary.q_t)
+    selection = np.zeros((len(lift_off), len(support.i_plus)))
+    selection[at] = chain.selection
+    jump = d @ (boundary.xd_a - lift_off) - selection @ support.i_plus
+    tip = bm.tip_jacobians(boundary.q_t)[1]  # the new tip's impulse is what is left: J2' Lambda
+    reaction = np.linalg.lstsq(tip.T, jump, rcond=None)[0]
+    assert np.abs(jump - tip.T @ reaction).max() < ROWS and reaction[2] > -ROWS
+
+
 @pytest.fixture(scope="module")
 def walk_stop(kept):
     planner = kept[0]
-    return kept_stop(planner.hybrid)
+    return kept_plan(planner.hybrid)
 
 
 def test_a_pushed_walk_stops_once_settled_and_stands(kept, walk_stop):
@@ -221,9 +277,66 @@ def test_a_stop_is_refused_where_it_was_not_planned(kept, walk_stop):
     planner, gait, chain, pose, support, meta = kept
     other = planner.plan(GaitRequest(0.5, 0.45, meta["alpha"]))
     walker = Walker(planner.hybrid, PlannedOrbit.of(other), RATE)
-    with pytest.raises(ValueError, match=r"cannot stop at this step: the stop is planned from the gait L = 0.45 m"):
+    with pytest.raises(ValueError, match=r"cannot stop at this step: the stop is planned with the gait L = 0.45 m"):
         walker.stop(walk_stop)
     walker = Walker(planner.hybrid, PlannedOrbit.of(gait), RATE)
     walker.run_phase()  # the step under way
     with pytest.raises(ValueError, match="before it starts"):
         walker.stop(walk_stop)
+
+
+@pytest.fixture(scope="module")
+def walk_start(kept):
+    return kept_plan(kept[0].hybrid, "start")
+
+
+def test_from_standing_a_start_ten_steps_and_a_stop_leave_it_standing(kept, walk_stop, walk_start):
+    """The issue's figure in the hybrid engine: standing in the start's posture, the start asked at
+    once (``Walker.start``), the gait walked with momentum steering, the stop asked from step 10 on
+    (taken once the walk has settled), then standing: every reaction in the floor's cone (the
+    runner's own check), every torque within the joint table, the start and the stop tracked, the
+    pelvis's speed rising from 0 and back to it."""
+    planner, gait, chain, pose, support, meta = kept
+    started, stopped = [], []
+
+    def before_step(walker):
+        if isinstance(walker.phase, Standing) and not started:
+            walker.start(walk_start)
+            started.append(walker.state.t + walker.state.t_step)
+        elif started and walker.state.step >= 10 and not stopped:
+            try:
+                walker.stop(walk_stop)
+            except Unsettled:
+                return
+            stopped.append(walker.state.step)
+
+    walk = Walk(PlannedOrbit.of(gait), rate=RATE, before_step=before_step, stand_duration=STANDING,
+                momentum_rate=DEFAULT_RATE, initial_state="standing", stance_length=meta["L"])
+    samples, touchdowns, end = [], [], None
+    for item in walk.batches():
+        if isinstance(item, StepSamples):
+            samples += [(sample, item.world.pelvis_linear_velocity[k]) for k, sample in enumerate(item.samples)]
+        elif isinstance(item, Touchdown):
+            touchdowns.append(item)
+        else:
+            end = item
+    assert isinstance(end, Finished), end
+    assert started == [0.0] and stopped
+    phases = [sample.phase for sample, _ in samples]
+    assert phases[0] == STARTING and phases[-1] == STANDING_PHASE and STOPPING in phases
+    lift_off = touchdowns[0]
+    assert lift_off.step == 0 and lift_off.t == pytest.approx(walk_start.plan.duration)
+    assert np.all(lift_off.double_support.i_minus == 0.0)
+    tracked = [np.abs(sample.q - walk_start.plan.reference(sample.t)[0]).max()
+               for sample, _ in samples if sample.phase == STARTING]
+    assert max(tracked) < 0.02  # rad
+    assert max(np.abs(sample.torque).max() for sample, _ in samples) <= 200.0 + 1e-9
+    speeds = np.array([np.linalg.norm(speed) for _, speed in samples])
+    assert speeds[0] < 1e-9 and speeds.max() > 0.5  # from rest, walking
+    still = [np.linalg.norm(speed) for sample, speed in samples
+             if sample.phase == STANDING_PHASE and sample.t > samples[-1][0].t - 2.0]
+    assert len(still) >= 2.0 * RATE - 1 and max(still) < STILL
+    errors = [t.state_error for t in touchdowns[1:-1]]
+    print(f"\nstart tracked within {max(tracked):.2g} rad; its lift-off's I^+ sum {lift_off.W:.1f} N m s; the "
+          f"touchdowns' errors {errors[0]:.2g} down to {min(errors):.2g}; the stop at step {stopped[0]}; pelvis at "
+          f"most {max(still):.2g} m/s over the last 2 s")
