@@ -40,6 +40,7 @@ AT_REST = 1e-3  # m/s: the pelvis speed of a robot standing at rest
 STILL_FOR = 2.0  # s of simulated time standing still before the push
 PUSH = 0.5  # N s forward: within the measured limit (about 1 N s forward or back, 2 N s sideways)
 DURATION = 8.0  # s standing: the push at about 2 s, recovered well before the end
+NO_START_KEPT = 0.4  # rad: an arm amplitude the package keeps no start for (its start is the default gait's)
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +71,7 @@ def _static_efforts() -> dict[str, float]:
 
 def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_node, tmp_path):
     """Stands 2 s at rest under a /cmd_vel of 0.8 m/s from 0.5 s on, refused (once, with the
-    reason), then a push of 0.5 N s, recovered by the end (8 s); a subscriber to /gait_phase that
+    reason: a gait the package keeps no start of), then a push of 0.5 N s, recovered by the end (8 s); a subscriber to /gait_phase that
     joins after 2 s receives STANDING (transient local); /joint_states' efforts are the standing
     posture's static torques; the recording holds the topics and the phase."""
     side = ClientSide("standing_test_client")
@@ -90,7 +91,7 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
         client = node.create_client(Push, f"/{SIMULATOR}/push")
         proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", f"stand_duration:={DURATION}",
                                "real_time_factor:=1.0", "publish_rate:=100.0", "exit_when_done:=true",
-                               "wait_for_subscribers:=1")
+                               "wait_for_subscribers:=1", f"arm_amplitude:={NO_START_KEPT}")
         side.connect(client, 60.0)
         side.wait(lambda: odom and _seconds(odom[-1].header) - _seconds(odom[0].header) >= 0.5, 60.0)
         timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=0.8))))

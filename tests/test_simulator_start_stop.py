@@ -1,7 +1,9 @@
-"""The simulator node and stopping, over Fast DDS with a planner of its own: /cmd_vel linear.x 0
-during the default walk stops it at the next touchdown (the kept stop, docs/model.md section 14.2)
-and the robot stands, /odom falling to rest; no /cmd_vel for cmd_vel_timeout after a command walks
-it back to the stop's gait and stops it too. (A start from standing: tests/test_simulator_standing.py.)"""
+"""The simulator node starting and stopping, over Fast DDS with a planner of its own: /cmd_vel
+linear.x 0 during the default walk stops it at the next touchdown (the kept stop, docs/model.md
+section 14.2) and the robot stands, /odom falling to rest; no /cmd_vel for cmd_vel_timeout after a
+command walks it back to the stop's gait and stops it too; standing, /cmd_vel 0.6 m/s starts it
+(the kept start, section 14.3), it walks, and 0 stops it standing again. (A start refused from
+standing: tests/test_simulator_standing.py.)"""
 
 from __future__ import annotations
 
@@ -125,3 +127,50 @@ def test_no_cmd_vel_for_the_timeout_is_a_command_of_0(planner_node, tmp_path):
     assert "walking back to 1.000 m/s" in log and "stopping at the touchdown of step" in log
     assert not [e for e in events if e.kind == GaitEvent.FALL]
     assert [phase.phase for phase in phases][-2:] == [GaitPhase.STOPPING, GaitPhase.STANDING]
+
+
+def test_from_standing_cmd_vel_starts_walks_and_stops(planner_node, tmp_path):
+    """Standing in the kept start's posture, /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s), the
+    gait's stances, the walk slowing to 0.6 m/s; then 0: it walks back to the stop's gait, stops and
+    stands. /odom's speed rises from 0 and returns to it (under 1e-3 m/s over the last 2 s); no fall."""
+    side = ClientSide("start_test_client")
+    events: list[GaitEvent] = []
+    phases: list[GaitPhase] = []
+    odom: list[Odometry] = []
+    log_file = tmp_path / "biped-gait-simulator.log"
+    try:
+        node = side.node
+        pub = node.create_publisher(Twist, "/cmd_vel", 10)
+        node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
+        node.create_subscription(GaitPhase, "/gait_phase", phases.append, 100)
+        node.create_subscription(Odometry, "/odom", odom.append, 1000)
+        node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+        proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "steps:=0", "real_time_factor:=0.0",
+                               "record:=false", "wait_for_subscribers:=1", f"stand_duration:={STAND}",
+                               "cmd_vel_timeout:=0.0")
+        side.wait(lambda: odom, 60.0)
+        pub.publish(Twist(linear=Vector3(x=0.6)))
+        side.wait(lambda: sum(e.kind == GaitEvent.TOUCHDOWN for e in events) >= 12, 180.0)
+        pub.publish(Twist(linear=Vector3(x=0.0)))
+        side.wait(lambda: any(e.kind in (GaitEvent.FINISHED, GaitEvent.FALL) for e in events), 240.0)
+        side.wait(lambda: odom and _stamp(odom[-1]) >= _stamp(next(e for e in events if e.kind == GaitEvent.FINISHED)) - 0.05, 30.0)
+        assert stop_node(proc) == 0
+    finally:
+        side.close()
+    log = log_file.read_text()
+    said = next(line for line in log.splitlines() if "starting onto the gait" in line)
+    print("\n" + said)
+    assert not [e for e in events if e.kind == GaitEvent.FALL]
+    kinds = [phase.phase for phase in phases]
+    assert kinds[:2] == [GaitPhase.STANDING, GaitPhase.STARTING]
+    assert GaitPhase.LEFT_STANCE in kinds and GaitPhase.RIGHT_STANCE in kinds
+    assert kinds[-2:] == [GaitPhase.STOPPING, GaitPhase.STANDING]
+    started = _stamp(phases[1])
+    resting = [_speed(m) for m in odom if _stamp(m) < started]
+    assert resting and max(resting) < STILL  # at rest before the start
+    assert max(_speed(m) for m in odom) > 0.5  # it walked
+    end = _stamp(odom[-1])
+    still = [_speed(m) for m in odom if _stamp(m) > end - 2.0]
+    assert len(still) > 10 and max(still) < STILL
+    print(f"/odom: at most {max(resting):.2g} m/s before the start, {max(_speed(m) for m in odom):.2f} walking, "
+          f"{max(still):.2g} over the last 2 s")

@@ -102,6 +102,7 @@ class SpeedCommand:
         self._start: KeptPlan | None = None  # the kept start onto the standing walk's gait, once made ready
         self._start_asked: tuple[float, float] | None = None  # the command that asks the standing walk to start
         self._source: str | None = None  # the walk's parameter set as given
+        self._startable = False  # the walk stands and a start onto its gait is kept
         self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
         self._ended = False  # the walk ended: commands are ignored until the next starts
         self._grid = DEFAULTS.walk_steps
@@ -127,7 +128,9 @@ class SpeedCommand:
             self._explained.clear()
             self._stop, self._stop_gait, self._preparing = None, None, None
             self._start, self._start_asked, self._source = None, None, source
-        startable = standing and stoppable and kept_gait("start") is not None and not kept_gait("start").why_not(walker.orbit)
+        start = kept_gait("start")
+        startable = standing and stoppable and start is not None and not start.why_not(walker.orbit)
+        self._startable = startable
         if stoppable:
             self._preparing = self._prepare(walker.orbit, source, startable)
         if standing:
@@ -220,7 +223,7 @@ class SpeedCommand:
     def _command(self, speed: float, yaw_rate: float) -> None:
         standing = self._standing
         if standing is not None:
-            if self._preparing is not None or self._start is not None:  # a start kept: taken before the next phase
+            if self._startable:  # a start kept: taken before the next phase (``_started``)
                 with self._lock:
                     self._start_asked = (speed, yaw_rate) if speed >= STOP_SPEED else None
                 return
@@ -332,7 +335,7 @@ class SpeedCommand:
                     f"{start.period:g} s (the kept start: {start.plan.duration:g} s with both feet down, then I^+), "
                     "then following the command")
         with self._lock:
-            self._standing, self._pending = None, (speed, yaw_rate)
+            self._standing, self._pending, self._startable = None, (speed, yaw_rate), False
         self._follow(walker, self._now_ns())
 
     def _stopped(self, walker: Walker, follower: SpeedFollower) -> bool:
