@@ -11,7 +11,7 @@ setup(
     license="Apache-2.0",
     python_requires=">=3.11",
     packages=find_packages(include=[PACKAGE, f"{PACKAGE}.*"]),
-    package_data={f"{PACKAGE}.core.data": ["*.yaml", "atlas/*.npz", "stop/*.npz"]},
+    package_data={f"{PACKAGE}.core.data": ["*.yaml", "atlas/*.npz", "stop/*.npz", "start/*.npz"]},
     data_files=[
         ("share/ament_index/resource_index/packages", [f"resource/{PACKAGE}"]),
         (f"share/{PACKAGE}", ["package.xml"]),

@@ -197,60 +197,6 @@ def walk_stop(kept):
     return kept_plan(planner.hybrid)
 
 
-def test_a_pushed_walk_stops_once_settled_and_stands(kept, walk_stop):
-    """The issue's figure in the hybrid engine: the gait walked with momentum steering, pushed by 0.5
-    N s forward in step 1, the stop asked before every step from step 2 (``Walker.stop``), refused
-    while the step starts farther than ``SETTLED`` from the gait (the touchdown would be too far
-    from the stop's plan), taken once it is; then standing: every reaction in the floor's cone (the
-    runner's own check, a fall otherwise), torques within the joint table, the stop tracked, the
-    pelvis still."""
-    planner, gait, chain, pose, support, meta = kept
-    refused, stopped = [], []
-
-    def before_step(walker):
-        if walker.state.step == 1:
-            walker.push(Push(np.array([0.5, 0.0, 0.0]), 0.2))
-        if walker.state.step >= 2 and not stopped:
-            try:
-                walker.stop(walk_stop)
-            except ValueError as exc:
-                assert "off its gait's start" in str(exc)
-                refused.append(walker.state.step)
-            else:
-                stopped.append(walker.state.step)
-
-    walk = Walk(PlannedOrbit.of(gait), rate=RATE, before_step=before_step, stand_duration=STANDING,
-                momentum_rate=DEFAULT_RATE)  # the simulator's default steering
-    samples, touchdowns, end = [], [], None
-    for item in walk.batches():
-        if isinstance(item, StepSamples):
-            samples += [(sample, item.world.pelvis_linear_velocity[k]) for k, sample in enumerate(item.samples)]
-        elif isinstance(item, Touchdown):
-            touchdowns.append(item)
-        elif not isinstance(item, AppliedPush):
-            end = item
-    assert isinstance(end, Finished), end
-    assert refused and refused == list(range(2, stopped[0]))  # settling: the error falls fourfold a step
-    stop = touchdowns[-1]
-    assert stop.step == stopped[0] and stop.double_support is not None and np.all(stop.i_plus == 0.0)
-    assert stop.t == pytest.approx(stop.double_support.t + support.duration)
-    assert stop.double_support.state_error < SETTLED * 1.5  # the touchdown follows the step's start (within 10 %)
-    phases = [sample.phase for sample, _ in samples]
-    assert phases[-1] == STANDING_PHASE and STOPPING in phases
-    assert max(np.abs(sample.torque).max() for sample, _ in samples) <= 200.0 + 1e-9
-    tracked = [np.abs(sample.q - walk_stop.plan.reference(sample.t - stop.double_support.t)[0]).max()
-               for sample, _ in samples if sample.phase == STOPPING]
-    assert max(tracked) < 0.02  # rad (0.7 mrad from the exact touchdown; up to 1.2e-2 from 1e-3 rad/s off)
-    standing = [(sample, speed) for sample, speed in samples if sample.phase == STANDING_PHASE]
-    assert 0.0 <= standing[0][0].t - stop.t < 1.0 / RATE  # the first sample from the stop's end
-    still = [np.linalg.norm(speed) for sample, speed in standing if sample.t > samples[-1][0].t - 2.0]
-    assert len(still) >= 2.0 * RATE - 1 and max(still) < STILL  # /odom's pelvis speed
-    assert np.abs(samples[-1][0].q - pose.q).max() < 1e-3
-    print(f"\nstop refused before steps {refused}, taken at step {stopped[0]} (touchdown "
-          f"{stop.double_support.state_error:.2g} off); tracked within {max(tracked):.2g} rad; pelvis at most "
-          f"{max(still):.2g} m/s over the last 2 s")
-
-
 def test_a_touchdown_off_the_plan_by_1e_3_rad_s_is_stopped(kept, walk_stop):
     """The walk's own errors: the touchdown at the plan's posture with its velocity 1e-3 rad/s off
     in each of four random directions (a re-aimed step reaches q_T, not the plan's velocity): the
@@ -290,25 +236,31 @@ def walk_start(kept):
     return kept_plan(kept[0].hybrid, "start")
 
 
-def test_from_standing_a_start_ten_steps_and_a_stop_leave_it_standing(kept, walk_stop, walk_start):
+def test_from_standing_a_start_a_pushed_walk_and_a_stop_leave_it_standing(kept, walk_stop, walk_start):
     """The issue's figure in the hybrid engine: standing in the start's posture, the start asked at
-    once (``Walker.start``), the gait walked with momentum steering, the stop asked from step 10 on
-    (taken once the walk has settled), then standing: every reaction in the floor's cone (the
-    runner's own check), every torque within the joint table, the start and the stop tracked, the
-    pelvis's speed rising from 0 and back to it."""
+    once (``Walker.start``: its 2 s, then I^+ onto the gait), the gait walked with momentum steering
+    (the simulator's), pushed by 0.5 N s forward in step 1; the stop asked before every step from
+    step 2, refused while the step starts farther than ``SETTLED`` from the gait (the touchdown would
+    be too far from the stop's plan), taken once it is; then standing. Every reaction in the floor's
+    cone (the runner's own check, a fall otherwise), every torque within the joint table, the start
+    and the stop tracked, the pelvis's speed rising from 0 and back to it."""
     planner, gait, chain, pose, support, meta = kept
-    started, stopped = [], []
+    started, refused, stopped = [], [], []
 
     def before_step(walker):
         if isinstance(walker.phase, Standing) and not started:
             walker.start(walk_start)
             started.append(walker.state.t + walker.state.t_step)
-        elif started and walker.state.step >= 10 and not stopped:
+        elif walker.state.step == 1:
+            walker.push(Push(np.array([0.5, 0.0, 0.0]), 0.2))
+        elif walker.state.step >= 2 and not stopped:
             try:
                 walker.stop(walk_stop)
-            except Unsettled:
-                return
-            stopped.append(walker.state.step)
+            except Unsettled as exc:
+                assert "off its gait's start" in str(exc)
+                refused.append(walker.state.step)
+            else:
+                stopped.append(walker.state.step)
 
     walk = Walk(PlannedOrbit.of(gait), rate=RATE, before_step=before_step, stand_duration=STANDING,
                 momentum_rate=DEFAULT_RATE, initial_state="standing", stance_length=meta["L"])
@@ -318,25 +270,35 @@ def test_from_standing_a_start_ten_steps_and_a_stop_leave_it_standing(kept, walk
             samples += [(sample, item.world.pelvis_linear_velocity[k]) for k, sample in enumerate(item.samples)]
         elif isinstance(item, Touchdown):
             touchdowns.append(item)
-        else:
+        elif not isinstance(item, AppliedPush):
             end = item
     assert isinstance(end, Finished), end
     assert started == [0.0] and stopped
+    assert refused and refused == list(range(2, stopped[0]))  # settling: the error falls fourfold a step
     phases = [sample.phase for sample, _ in samples]
     assert phases[0] == STARTING and phases[-1] == STANDING_PHASE and STOPPING in phases
     lift_off = touchdowns[0]
     assert lift_off.step == 0 and lift_off.t == pytest.approx(walk_start.plan.duration)
     assert np.all(lift_off.double_support.i_minus == 0.0)
-    tracked = [np.abs(sample.q - walk_start.plan.reference(sample.t)[0]).max()
-               for sample, _ in samples if sample.phase == STARTING]
-    assert max(tracked) < 0.02  # rad
+    started_within = max(np.abs(sample.q - walk_start.plan.reference(sample.t)[0]).max()
+                         for sample, _ in samples if sample.phase == STARTING)
+    assert started_within < 0.02  # rad
+    stop = touchdowns[-1]
+    assert stop.step == stopped[0] and stop.double_support is not None and np.all(stop.i_plus == 0.0)
+    assert stop.t == pytest.approx(stop.double_support.t + support.duration)
+    assert stop.double_support.state_error < SETTLED * 1.5  # the touchdown follows the step's start (within 10 %)
+    stopped_within = max(np.abs(sample.q - walk_stop.plan.reference(sample.t - stop.double_support.t)[0]).max()
+                         for sample, _ in samples if sample.phase == STOPPING)
+    assert stopped_within < 0.02  # rad (0.7 mrad from the exact touchdown; up to 1.2e-2 from 1e-3 rad/s off)
     assert max(np.abs(sample.torque).max() for sample, _ in samples) <= 200.0 + 1e-9
     speeds = np.array([np.linalg.norm(speed) for _, speed in samples])
     assert speeds[0] < 1e-9 and speeds.max() > 0.5  # from rest, walking
-    still = [np.linalg.norm(speed) for sample, speed in samples
-             if sample.phase == STANDING_PHASE and sample.t > samples[-1][0].t - 2.0]
-    assert len(still) >= 2.0 * RATE - 1 and max(still) < STILL
-    errors = [t.state_error for t in touchdowns[1:-1]]
-    print(f"\nstart tracked within {max(tracked):.2g} rad; its lift-off's I^+ sum {lift_off.W:.1f} N m s; the "
-          f"touchdowns' errors {errors[0]:.2g} down to {min(errors):.2g}; the stop at step {stopped[0]}; pelvis at "
-          f"most {max(still):.2g} m/s over the last 2 s")
+    standing = [(sample, speed) for sample, speed in samples if sample.phase == STANDING_PHASE]
+    assert 0.0 <= standing[0][0].t - stop.t < 1.0 / RATE  # the first sample from the stop's end
+    still = [np.linalg.norm(speed) for sample, speed in standing if sample.t > samples[-1][0].t - 2.0]
+    assert len(still) >= 2.0 * RATE - 1 and max(still) < STILL  # /odom's pelvis speed
+    assert np.abs(samples[-1][0].q - pose.q).max() < 1e-3
+    print(f"\nstart tracked within {started_within:.2g} rad, its lift-off's I^+ sum {np.abs(lift_off.i_plus).sum():.1f} "
+          f"N m s; stop refused before steps {refused}, taken at step {stopped[0]} (touchdown "
+          f"{stop.double_support.state_error:.2g} off), tracked within {stopped_within:.2g} rad; pelvis at most "
+          f"{max(still):.2g} m/s over the last 2 s")

@@ -33,8 +33,11 @@ Standing, starting and stopping: with ``initial_state`` ``standing`` the robot s
 both feet down, held by the core's balance controller (``core/walking/phases/standing.py``; in
 MuJoCo by its own contacts with friction), for ``stand_duration`` s (0: until stopped), publishing and recording as a
 walk does (``/gait_phase`` ``STANDING``, ``/odom`` at rest); pushes act on it with both feet held.
-A ``/cmd_vel`` that is not 0 asks it to start onto the plan's gait, which the core refuses with
-the physical reason (``start_stop``, docs/model.md section 8.10), logged once: the robot stands on.
+A ``/cmd_vel`` that is not 0 starts it onto the plan's gait where the package keeps a start of that
+gait (the hybrid engine, the default parameter set's default gait: the robot stands in the start's
+posture, and ``/gait_phase`` says ``STARTING`` for its 2 s with both feet down, docs/model.md
+section 14.3); elsewhere the core refuses it with the physical reason (``start_stop``, section
+8.10), logged once: the robot stands on.
 ``/cmd_vel`` linear.x 0 asks a walk to stop: the hybrid engine's walk of the gait the package keeps
 a stop of (the default parameter set's default gait) stops at the next touchdown on that gait
 (``/gait_phase`` ``STOPPING``, 2 s with both feet down) and stands (``STANDING``, for
@@ -188,8 +191,9 @@ PARAMETERS = (
           "(0: dead-beat)", 0.0, 0.99),
     Param("initial_state", INITIAL_STATES[0], "how the walk begins: 'walking' (on the gait's orbit, at the start of "
           "a step) or 'standing' (at rest, both feet down, held by the balance controller for stand_duration, "
-          "in either engine). A standing robot cannot start yet: /cmd_vel is refused with the physical reason "
-          "(docs/model.md section 8.10)", choices=INITIAL_STATES),
+          "in either engine). /cmd_vel starts a standing robot where a start is kept for its gait (the hybrid "
+          "engine, the default gait: docs/model.md section 14.3), else is refused with the physical reason "
+          "(section 8.10)", choices=INITIAL_STATES),
     Param("stand_duration", 0.0, "with initial_state 'standing', or after a walk's stop (/cmd_vel 0): how long the "
           "robot stands (s of simulated time, to the next 0.1 s); 0: until stopped. steps counts the steps of a walk",
           0.0, 1e6),

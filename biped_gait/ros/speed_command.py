@@ -30,9 +30,14 @@ section 8.10).
 more is said of them, a start or stop still being planned included: the fall's message is the
 last. A reset starts a new walk (``start``).
 
-**Standing** (the walk begins standing): no follower and no envelope; a command that is not 0
-asks for a start onto the walk's gait, which the core plans (``start_stop.plan_start``, in a
-thread, once) and refuses with its physical reason, logged once: the robot stands on.
+**Standing** (the walk begins standing): no follower and no envelope. **Where a start is kept**
+(the hybrid engine's walk of the default parameter set on the gait the package keeps a start of,
+made ready in a thread with the stop when the walk begins): a command of at least ``STOP_SPEED``
+starts the walk before its next standing phase (``Walker.start``: the start's 2 s of double
+support, then I^+ onto the gait, docs/model.md section 14.3), then the follower is made and walks
+the command from the gait. **Elsewhere** a command that is not 0 asks for a start onto the walk's
+gait, which the core plans (``start_stop.plan_start``, in a thread, once) and refuses with its
+physical reason, logged once: the robot stands on.
 
 **Timeout** (as ros2_control's diff_drive_controller ``cmd_vel_timeout``): once a command came,
 no /cmd_vel for ``timeout`` s of simulated time counts as a command of 0, taken before the next
