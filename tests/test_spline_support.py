@@ -232,6 +232,21 @@ def test_a_stop_is_refused_where_it_was_not_planned(kept, walk_stop):
         walker.stop(walk_stop)
 
 
+def test_a_start_is_refused_where_it_was_not_planned(kept, walk_start):
+    """Not standing; standing for another gait; standing off the start's posture at rest."""
+    planner, gait, chain, pose, support, meta = kept
+    with pytest.raises(ValueError, match="a start begins from standing"):
+        Walker(planner.hybrid, PlannedOrbit.of(gait), RATE).start(walk_start)
+    other = planner.plan(GaitRequest(0.5, 0.45, meta["alpha"]))
+    walker = Walker(planner.hybrid, PlannedOrbit.of(other), RATE, phase=Standing(walk_start.balance))
+    with pytest.raises(ValueError, match=r"cannot start: the start is planned with the gait L = 0.45 m"):
+        walker.start(walk_start)
+    walker = Walker(planner.hybrid, PlannedOrbit.of(gait), RATE, phase=Standing(walk_start.balance))
+    walker.shove(np.full(len(walker.state.qd), 1e-3))
+    with pytest.raises(Unsettled, match="off the start's posture at rest"):
+        walker.start(walk_start)
+
+
 @pytest.fixture(scope="module")
 def walk_start(kept):
     return kept_plan(kept[0].hybrid, "start")
