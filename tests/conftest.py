@@ -9,6 +9,7 @@ import math
 import os
 import random
 import shutil
+import sys
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -121,6 +122,23 @@ LONGEST_FIRST = ("test_study_cli", "test_faults_nodes", "test_actuated_walk", "t
                  "test_conversions", "test_simulator_node", "test_replay", "test_launch", "test_analyze", "test_sweep",
                  "test_optimize", "test_walk", "test_cli", "test_speed", "test_reference_figures",
                  "test_effort_options")
+
+
+@pytest.fixture(autouse=True)
+def _no_node_left_running():
+    """Stop the node processes a test started and left running (it failed before stopping them):
+    in its worker's ROS domain such a node would publish into the next tests' topics, and one
+    failure would become many. The nodes of module fixtures, started before this fixture, are
+    theirs to stop."""
+    helpers = sys.modules.get("tests.ros_helpers")
+    first = len(helpers.STARTED) if helpers is not None else 0
+    yield
+    helpers = sys.modules.get("tests.ros_helpers")
+    if helpers is None:
+        return
+    for proc in helpers.STARTED[first:]:
+        if proc.poll() is None:
+            helpers.stop_node(proc)
 
 
 def pytest_collection_modifyitems(config, items):

@@ -14,10 +14,16 @@ from rosbags.highlevel import AnyReader
 from biped_gait.ros.launch import start_entry, stop_process
 
 
+STARTED: list[subprocess.Popen] = []
+"""Every node process the tests started, in order (``tests/conftest.py`` stops those a test left running)."""
+
+
 def start_node(entry: str, *ros_args: str, cwd: Path) -> subprocess.Popen:
     """Start an entry point (e.g. ``biped-gait-planner``) with ``--ros-args`` in its own
     process, logging to ``cwd/<entry>.log``."""
-    return start_entry(entry, list(ros_args), log=cwd / f"{entry}.log", cwd=cwd)
+    proc = start_entry(entry, list(ros_args), log=cwd / f"{entry}.log", cwd=cwd)
+    STARTED.append(proc)
+    return proc
 
 
 @contextmanager

@@ -191,8 +191,8 @@ def test_a_push_well_above_the_limit_is_a_fall_with_its_reason(planner_node, tmp
 
 
 def test_after_a_fall_its_message_is_the_last(planner_node, tmp_path):
-    """Standing, a /cmd_vel to walk starts the planning of the start (a second or more, in a
-    thread), and a push of 5 N s through ~/push makes the robot fall meanwhile: the fall's line is
+    """Standing for a gait the package keeps no start of, a /cmd_vel to walk starts the planning of
+    the start (a second or more, in a thread), and a push of 5 N s through ~/push makes the robot fall meanwhile: the fall's line is
     the walk's last warning or error (the refusal, if it was not said before the fall, is not said
     after it), and later commands are not answered."""
     side = ClientSide("fall_test_client")
@@ -207,7 +207,7 @@ def test_after_a_fall_its_message_is_the_last(planner_node, tmp_path):
         client = node.create_client(Push, f"/{SIMULATOR}/push")
         proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "stand_duration:=0.0",
                                "real_time_factor:=1.0", "publish_rate:=100.0", "record:=false",
-                               "wait_for_subscribers:=1", "exit_when_done:=false")
+                               "wait_for_subscribers:=1", "exit_when_done:=false", f"arm_amplitude:={NO_START_KEPT}")
         side.connect(client, 60.0)
         side.wait(lambda: joint_states, 60.0)  # it stands
         timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=0.8))))
