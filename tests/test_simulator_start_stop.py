@@ -39,6 +39,23 @@ def _stamp(msg) -> float:
     return msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
 
 
+def _listen(side: ClientSide, events: list, phases: list, odom: list):
+    """Subscribe ``side`` to the walk's events, phases and /odom (into the lists) and to
+    /joint_states (the simulator waits for a subscriber); the /cmd_vel publisher."""
+    node = side.node
+    node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
+    node.create_subscription(GaitPhase, "/gait_phase", phases.append, 100)
+    node.create_subscription(Odometry, "/odom", odom.append, 1000)
+    node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+    return node.create_publisher(Twist, "/cmd_vel", 10)
+
+
+def _to_the_end(side: ClientSide, events: list, odom: list, timeout: float) -> None:
+    """Wait (``timeout`` s) for the walk's end, then for its last /odom."""
+    side.wait(lambda: any(e.kind in (GaitEvent.FINISHED, GaitEvent.FALL) for e in events), timeout)
+    side.wait(lambda: odom and _stamp(odom[-1]) >= _stamp(next(e for e in events if e.kind == GaitEvent.FINISHED)) - 0.05, 30.0)
+
+
 @pytest.fixture(scope="module")
 def planner_node(tmp_path_factory):
     with planner_process(PLANNER, tmp_path_factory.mktemp("start_stop_planner")) as proc:
@@ -55,18 +72,12 @@ def test_cmd_vel_zero_stops_the_walk_at_the_next_touchdown_and_it_stands(planner
     odom: list[Odometry] = []
     log_file = tmp_path / "biped-gait-simulator.log"
     try:
-        node = side.node
-        pub = node.create_publisher(Twist, "/cmd_vel", 10)
-        node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
-        node.create_subscription(GaitPhase, "/gait_phase", phases.append, 100)
-        node.create_subscription(Odometry, "/odom", odom.append, 1000)
-        node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+        pub = _listen(side, events, phases, odom)
         proc = start_simulator(tmp_path, PLANNER, "steps:=0", "real_time_factor:=0.0", "record:=false",
                                "wait_for_subscribers:=1", f"stand_duration:={STAND}", "cmd_vel_timeout:=0.0")
         side.wait(lambda: any(e.kind == GaitEvent.TOUCHDOWN for e in events), 60.0)
         pub.publish(Twist(linear=Vector3(x=0.0)))
-        side.wait(lambda: any(e.kind in (GaitEvent.FINISHED, GaitEvent.FALL) for e in events), 180.0)
-        side.wait(lambda: odom and _stamp(odom[-1]) >= _stamp(next(e for e in events if e.kind == GaitEvent.FINISHED)) - 0.05, 30.0)
+        _to_the_end(side, events, odom, 180.0)
         assert stop_node(proc) == 0
     finally:
         side.close()
@@ -139,12 +150,7 @@ def test_from_standing_cmd_vel_starts_walks_and_stops(planner_node, tmp_path):
     odom: list[Odometry] = []
     log_file = tmp_path / "biped-gait-simulator.log"
     try:
-        node = side.node
-        pub = node.create_publisher(Twist, "/cmd_vel", 10)
-        node.create_subscription(GaitEvent, "/gait_events", events.append, 100)
-        node.create_subscription(GaitPhase, "/gait_phase", phases.append, 100)
-        node.create_subscription(Odometry, "/odom", odom.append, 1000)
-        node.create_subscription(JointState, "/joint_states", lambda m: None, 10)
+        pub = _listen(side, events, phases, odom)
         proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "steps:=0", "real_time_factor:=0.0",
                                "record:=false", "wait_for_subscribers:=1", f"stand_duration:={STAND}",
                                "cmd_vel_timeout:=0.0")
@@ -152,8 +158,7 @@ def test_from_standing_cmd_vel_starts_walks_and_stops(planner_node, tmp_path):
         pub.publish(Twist(linear=Vector3(x=0.6)))
         side.wait(lambda: sum(e.kind == GaitEvent.TOUCHDOWN for e in events) >= 12, 180.0)
         pub.publish(Twist(linear=Vector3(x=0.0)))
-        side.wait(lambda: any(e.kind in (GaitEvent.FINISHED, GaitEvent.FALL) for e in events), 240.0)
-        side.wait(lambda: odom and _stamp(odom[-1]) >= _stamp(next(e for e in events if e.kind == GaitEvent.FINISHED)) - 0.05, 30.0)
+        _to_the_end(side, events, odom, 240.0)
         assert stop_node(proc) == 0
     finally:
         side.close()

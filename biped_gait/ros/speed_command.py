@@ -136,7 +136,7 @@ class SpeedCommand:
         start = kept_gait("start")
         startable = standing and stoppable and start is not None and not start.why_not(walker.orbit)
         self._startable = startable
-        if stoppable:
+        if stoppable and (startable or not standing):  # a standing walk that cannot start needs no stop
             self._preparing = self._prepare(walker.orbit, source, startable)
         if standing:
             with self._lock:
