@@ -54,6 +54,10 @@ def _plan(sub) -> None:
                       "effort limits, and ballistic between, in place of the impulses (the least-effort cycle, "
                       "solved by IPOPT; the simulator walks the variant the planner node serves, "
                       "docs/ros.md); default 0, the impulses")
+    plan.add_argument("--start-stop", action="store_true",
+                      help="also the gait's start from standing and its stop to standing, each a double support of "
+                      "2 s within the joints' effort limits (the package keeps the default gait's; another gait's "
+                      "is refused with the reason; docs/model.md 14.2, 14.3)")
     plan.add_argument("--out", type=Path, metavar="DIR", help="write plan.json and plan.png (the step: the biped from "
                       "the side, joint angles, ground reaction and friction ratio, yaw momentum) in this folder")
     _run(plan, "plan:run")

@@ -34,11 +34,15 @@ def planner_process(name: str, cwd: Path) -> Iterator[subprocess.Popen]:
     assert stop_node(proc) == 0
 
 
-def start_simulator(where: Path, planner: str, *params: str) -> subprocess.Popen:
+def start_simulator(where: Path, planner: str, *params: str, initial_state: str | None = "walking") -> subprocess.Popen:
     """A simulator asking the planner node named ``planner``, recording under ``where/bags``,
-    with the parameters ``params`` ('name:=value'), logging to ``where``."""
+    with the parameters ``params`` ('name:=value'), logging to ``where``; it begins in
+    ``initial_state`` (the walks of most tests: ``walking``, on the gait's orbit), None: the node's
+    default (standing) or as ``params`` say."""
     args = ["-p", f"plan_service:=/{planner}/plan_gait", "-p", f"optimize_action:=/{planner}/optimize_arm_swing",
             "-p", f"record_dir:={where / 'bags'}"]
+    if initial_state is not None:
+        args += ["-p", f"initial_state:={initial_state}"]
     for p in params:
         args += ["-p", p]
     return start_node("biped-gait-simulator", *args, cwd=where)

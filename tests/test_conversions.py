@@ -55,7 +55,8 @@ def test_every_message_field_of_the_field_list_carries_the_core_value(planner, d
         checked += 1
     # every GaitPlan field but the header, the mode code, the reasons and the trajectory with its joint mapping
     trajectory = {"trajectory", "trajectory_stance_side", "joint_roles", "joint_signs", "stride_effort",
-                  "double_support_phase", "swing_phases"}  # the last two: test_the_phase_message_..., test_the_swing_...
+                  "double_support_phase", "swing_phases",  # test_the_phase_message_..., test_the_swing_...
+                  "start_phase", "stop_phase"}  # test_planner_node's test_the_start_and_stop_are_served_...
     assert checked == len(set(GaitPlan.get_fields_and_field_types()) - {"header", "mode", "reasons"} - trajectory)
     assert mode_from_msg(msg.mode) is GaitMode.NORMAL and list(msg.reasons) == []
     assert len(msg.trajectory.points) == len(default_gait.figures.samples.t)

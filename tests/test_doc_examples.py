@@ -36,6 +36,7 @@ RUN = {
     ".venv/bin/biped-gait plan --friction-margin 0.1": (0, "admissible True"),
     ".venv/bin/biped-gait plan --rate-bound 12": (0, "admissible True"),
     ".venv/bin/biped-gait plan --double-support 0.1 --json plan.json": (0, "double support of 0.1 s: E ="),
+    ".venv/bin/biped-gait plan --start-stop --json plan.json": (0, "stop to standing: 2 s with both feet down"),
     ".venv/bin/biped-gait plan --params aoustin2013-hips --alpha-deg 20": (0, "admissible True"),
     ".venv/bin/biped-gait plan --params aoustin2013-hips --alpha-deg 20 --step-width 0.3 --period 0.5":
         (0, "step width 0.300 m"),
@@ -53,12 +54,14 @@ NOT_RUN = {
     "bash tools/demo.sh": "the set-up and the demo: CI runs them from a fresh clone",
     "bash tools/test.sh": "this suite",
     ".venv/bin/biped-gait-planner": UNTIL_STOPPED,
-    ".venv/bin/biped-gait-simulator --ros-args -p steps:=0 -p optimize_arms:=true -p live_view:=true": UNTIL_STOPPED,
+    ".venv/bin/biped-gait-simulator --ros-args -p live_view:=true": UNTIL_STOPPED,
     ".venv/bin/biped-gait-simulator --ros-args -p params:=aoustin2013-hips -p arm_amplitude:=0.349 -p turn_radius:=2.0 "
-    "-p steps:=0 -p live_view:=true": UNTIL_STOPPED,
-    ".venv/bin/biped-gait-simulator --ros-args -p steps:=10 -p arm_amplitude:=0.35 -p friction_margin:=0.05": UNTIL_STOPPED,
-    ".venv/bin/biped-gait-simulator --ros-args -p steps:=20 -p pushes:=4 0.5 0.5 0 0; 9 0.5 0 -1.0 0": UNTIL_STOPPED,
-    ".venv/bin/biped-gait-simulator --ros-args -p double_support:=0.1":
+    "-p initial_state:=walking -p live_view:=true": UNTIL_STOPPED,
+    ".venv/bin/biped-gait-simulator --ros-args -p initial_state:=walking -p steps:=10 -p arm_amplitude:=0.35 "
+    "-p friction_margin:=0.05": UNTIL_STOPPED,
+    ".venv/bin/biped-gait-simulator --ros-args -p initial_state:=walking -p steps:=20 -p pushes:=4 0.5 0.5 0 0; "
+    "9 0.5 0 -1.0 0": UNTIL_STOPPED,
+    ".venv/bin/biped-gait-simulator --ros-args -p double_support:=0.1 -p initial_state:=walking":
         UNTIL_STOPPED + "; test_simulator_lasting.py walks it 20 steps",
     ".venv/bin/biped-gait sweep --step-length 0.40 0.45 0.50 --mode normal anti-normal --out sweep-results":
         "a study of minutes: test_sweep.py runs sweeps on fewer gaits",
@@ -71,7 +74,8 @@ NOT_RUN = {
     ".venv/bin/biped-gait atlas build --params my-biped.yaml": "your own biped: minutes on 2 cores; test_atlas.py builds small atlases",
     ".venv/bin/biped-gait optimize-arms --params my-biped.yaml": "your own biped, after its atlas",
     ".venv/bin/biped-gait-planner --ros-args -p default_params:=$PWD/my-biped.yaml": UNTIL_STOPPED,
-    ".venv/bin/biped-gait-simulator --ros-args -p params:=$PWD/my-biped.yaml -p steps:=10": UNTIL_STOPPED,
+    ".venv/bin/biped-gait-simulator --ros-args -p params:=$PWD/my-biped.yaml -p initial_state:=walking -p steps:=10":
+        UNTIL_STOPPED,
 }
 
 

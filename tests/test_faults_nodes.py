@@ -342,9 +342,22 @@ def test_a_plan_naming_a_file_is_refused(side, tmp_path, wire_params):
     assert event.kind == GaitEvent.NOT_STARTED and "refused" in event.message
 
 
-def test_the_launcher_without_a_config_ends_with_the_walk(tmp_path):
-    """The nodes' defaults (20 steps in real time) with --analyze: it ends, it does not hang."""
+def test_the_launcher_without_a_config_stands_until_stopped(tmp_path):
+    """The nodes' defaults: the simulator stands (its initial_state), waiting for /cmd_vel, until
+    Ctrl-C, which ends both nodes (status 130) with their recordings finished."""
     launch = shutil.which("biped-gait-launch", path=str(Path(sys.executable).parent))
-    done = subprocess.run([launch, "--analyze"], cwd=tmp_path, capture_output=True, text=True, timeout=180)
-    assert done.returncode == 0, done.stderr[-2000:]
-    assert list((tmp_path / "bags").glob("walk_*/analysis/summary.json"))
+    out = tmp_path / "launch.log"
+    with open(out, "wb") as sink:
+        proc = subprocess.Popen([launch], cwd=tmp_path, stdout=sink, stderr=subprocess.STDOUT)
+    try:
+        wait_for(lambda: "standing for as long as the node runs" in out.read_text() or proc.poll() is not None,
+                 90.0, "the robot did not stand", (out,))
+        assert proc.poll() is None, out.read_text()[-2000:]
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=60) == 130, out.read_text()[-2000:]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    mcaps = list((tmp_path / "bags").glob("*/*.mcap"))
+    assert len(mcaps) == 2 and all(is_complete(m) for m in mcaps)

@@ -27,7 +27,8 @@ def config(tmp_path: Path, **simulator) -> Path:
     params = {
         "biped_gait_planner": {"ros__parameters": {"record": True, "record_dir": str(tmp_path / "bags")}},
         "biped_gait_simulator": {"ros__parameters": {
-            "record": True, "record_dir": str(tmp_path / "bags"), "exit_when_done": True, **simulator}},
+            "record": True, "record_dir": str(tmp_path / "bags"), "exit_when_done": True, "initial_state": "walking",
+            **simulator}},
     }
     path = tmp_path / "launch.yaml"
     path.write_text(yaml.safe_dump(params))

@@ -527,6 +527,40 @@ def test_a_bad_lasting_double_support_is_refused_and_the_node_serves_on(ros):
     assert ros.call(ros.client, plan_request(arm_amplitude=0.3)).success
 
 
+def test_the_start_and_stop_are_served_in_the_double_supports_layout(ros, planner):
+    """start_stop: the default gait's plan carries the kept start and stop (the files' samples, in
+    the plan's double_support_coordinates and actuated_joints, flattened row by row), the message
+    says both; another gait's are refused with the reason (success false, the gait still planned);
+    beside a double support that lasts, refused in one line; the node serves on."""
+    from biped_gait.core.gait.spline_support import kept_path, load_plan
+
+    response = ros.call(ros.client, plan_request(start_stop=True), timeout=60.0)
+    assert response.success, response.message
+    assert "start: solved (kept in the package" in response.message and "stop: solved (kept" in response.message
+    plan = response.plan
+    nx, na = len(plan.double_support_coordinates), len(plan.actuated_joints)
+    for phase, kind in ((plan.start_phase, "start"), (plan.stop_phase, "stop")):
+        support, meta = load_plan(kept_path(kind), planner.model)
+        assert phase.success and phase.duration == meta["duration"] and phase.effort_total == meta["effort_total"]
+        assert np.array_equal(phase.t, support.t)
+        assert np.array_equal(np.reshape(phase.x, (-1, nx)), support.x)
+        assert np.array_equal(np.reshape(phase.torques, (-1, na)), support.torques)
+        assert np.array_equal(np.reshape(phase.contact_forces, (-1, 2, 3)), support.contact_forces)
+        assert max(phase.peak_torque) <= 200.0 + 1e-4  # the joint table's limit, to IPOPT's tolerance on it
+    assert not any(plan.start_phase.i_minus) and any(plan.start_phase.i_plus)  # a launch, no landing
+    assert any(plan.stop_phase.i_minus) and not any(plan.stop_phase.i_plus)  # a landing, no launch
+    assert plan_request().start_stop is False and ros.call(ros.client, plan_request()).plan.start_phase.duration == 0.0
+    other = ros.call(ros.client, plan_request(arm_amplitude=0.4, start_stop=True), timeout=60.0)
+    assert not other.success and other.message.startswith("admissible")
+    assert "start: the start is planned with the gait L = 0.45 m" in other.message
+    assert other.plan.converged and other.plan.start_phase.duration == 0.0 and not other.plan.start_phase.success
+    assert not other.plan.start_phase.t and not other.plan.stop_phase.x
+    lasting = ros.call(ros.client, plan_request(start_stop=True, double_support=0.1), timeout=60.0)
+    assert not lasting.success and "of the paper's impulsive gait, not with double_support 0.1 s" in lasting.message
+    assert "\n" not in lasting.message
+    assert ros.call(ros.client, plan_request(arm_amplitude=0.3)).success
+
+
 def test_diagnostics_count_the_requests(ros):
     from diagnostic_msgs.msg import DiagnosticArray
 

@@ -1,4 +1,4 @@
-"""The simulator node standing (``initial_state:=standing``) over Fast DDS with a planner of its
+"""The simulator node standing (its default ``initial_state``, standing) over Fast DDS with a planner of its
 own: the robot stands at rest (the pelvis still on /odom, /gait_phase STANDING, learnt by a
 subscriber that joins late, /joint_states' efforts the balance controller's torques), a /cmd_vel to
 walk is refused once with the core's physical reason and the robot stands on, a push within the
@@ -89,9 +89,9 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
         node.create_subscription(GaitPhase, "/gait_phase", phases.append, 100)
         node.create_subscription(JointState, "/joint_states", joint_states.append, 1000)  # the walk waits for it
         client = node.create_client(Push, f"/{SIMULATOR}/push")
-        proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", f"stand_duration:={DURATION}",
+        proc = start_simulator(tmp_path, PLANNER, f"stand_duration:={DURATION}",
                                "real_time_factor:=1.0", "publish_rate:=100.0", "exit_when_done:=true",
-                               "wait_for_subscribers:=1", f"arm_amplitude:={NO_START_KEPT}")
+                               "wait_for_subscribers:=1", f"arm_amplitude:={NO_START_KEPT}", initial_state=None)
         side.connect(client, 60.0)
         side.wait(lambda: odom and _seconds(odom[-1].header) - _seconds(odom[0].header) >= 0.5, 60.0)
         timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=0.8))))
@@ -156,9 +156,9 @@ def test_standing_at_rest_refusing_to_walk_and_recovering_from_a_push(planner_no
 def test_mujoco_stands_on_its_contacts_and_recovers_a_push(planner_node, tmp_path):
     """``engine:=mujoco``: both feet on MuJoCo's floor, held by its contacts with friction; at rest
     before a scripted push of 0.5 N s (forward, at 0.225 s), at rest again by the end (4 s)."""
-    proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "engine:=mujoco", "stand_duration:=4.0",
+    proc = start_simulator(tmp_path, PLANNER, "engine:=mujoco", "stand_duration:=4.0",
                            "real_time_factor:=0.0", "publish_rate:=100.0", "exit_when_done:=true",
-                           f"pushes:=0 0.5 {PUSH} 0 0")
+                           f"pushes:=0 0.5 {PUSH} 0 0", initial_state=None)
     assert proc.wait(timeout=120) == 0, (tmp_path / "biped-gait-simulator.log").read_text()
     [bag] = list((tmp_path / "bags").iterdir())
     recorded = read_bag(bag)
@@ -176,9 +176,9 @@ def test_a_push_well_above_the_limit_is_a_fall_with_its_reason(planner_node, tmp
     """5 N s forward, scripted half a period into the standing: a FALL event with its reason (the
     planner's model: a foot's reaction leaves the cone; MuJoCo: a foot slides or lifts), the log
     line, exit status 1."""
-    proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", f"engine:={engine}", "stand_duration:=2.0",
+    proc = start_simulator(tmp_path, PLANNER, f"engine:={engine}", "stand_duration:=2.0",
                            "real_time_factor:=0.0", "publish_rate:=100.0", "exit_when_done:=true",
-                           "pushes:=0 0.5 5.0 0 0")
+                           "pushes:=0 0.5 5.0 0 0", initial_state=None)
     assert proc.wait(timeout=120) == 1
     log = (tmp_path / "biped-gait-simulator.log").read_text()
     assert "the robot fell in step 0" in log
@@ -205,9 +205,10 @@ def test_after_a_fall_its_message_is_the_last(planner_node, tmp_path):
         joint_states: list[JointState] = []
         node.create_subscription(JointState, "/joint_states", joint_states.append, 1000)
         client = node.create_client(Push, f"/{SIMULATOR}/push")
-        proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "stand_duration:=0.0",
+        proc = start_simulator(tmp_path, PLANNER, "stand_duration:=0.0",
                                "real_time_factor:=1.0", "publish_rate:=100.0", "record:=false",
-                               "wait_for_subscribers:=1", "exit_when_done:=false", f"arm_amplitude:={NO_START_KEPT}")
+                               "wait_for_subscribers:=1", "exit_when_done:=false", f"arm_amplitude:={NO_START_KEPT}",
+                               initial_state=None)
         side.connect(client, 60.0)
         side.wait(lambda: joint_states, 60.0)  # it stands
         timer = node.create_timer(0.1, lambda: pub.publish(Twist(linear=Vector3(x=0.8))))

@@ -141,7 +141,8 @@ def test_no_cmd_vel_for_the_timeout_is_a_command_of_0(planner_node, tmp_path):
 
 
 def test_from_standing_cmd_vel_starts_walks_and_stops(planner_node, tmp_path):
-    """Standing in the kept start's posture, /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s), the
+    """The simulator as it starts by default (its initial_state and steps; unpaced here, and not
+    recording) stands in the kept start's posture; /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s), the
     gait's stances, the walk slowing to 0.6 m/s; then 0: it walks back to the stop's gait, stops and
     stands. /odom's speed rises from 0 and returns to it (under 1e-3 m/s over the last 2 s); no fall."""
     side = ClientSide("start_test_client")
@@ -151,9 +152,8 @@ def test_from_standing_cmd_vel_starts_walks_and_stops(planner_node, tmp_path):
     log_file = tmp_path / "biped-gait-simulator.log"
     try:
         pub = _listen(side, events, phases, odom)
-        proc = start_simulator(tmp_path, PLANNER, "initial_state:=standing", "steps:=0", "real_time_factor:=0.0",
-                               "record:=false", "wait_for_subscribers:=1", f"stand_duration:={STAND}",
-                               "cmd_vel_timeout:=0.0")
+        proc = start_simulator(tmp_path, PLANNER, "real_time_factor:=0.0", "record:=false", "wait_for_subscribers:=1",
+                               f"stand_duration:={STAND}", "cmd_vel_timeout:=0.0", initial_state=None)
         side.wait(lambda: odom, 60.0)
         pub.publish(Twist(linear=Vector3(x=0.6)))
         side.wait(lambda: sum(e.kind == GaitEvent.TOUCHDOWN for e in events) >= 12, 180.0)

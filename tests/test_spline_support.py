@@ -6,7 +6,12 @@ again, in the hybrid engine."""
 
 from __future__ import annotations
 
+import json
+import shutil
+import subprocess
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -33,6 +38,7 @@ from biped_gait.core.walking.walk import Walk
 # What the kept plan holds, and how well: IPOPT's constraint tolerance is 1e-6 (N, N m, rad) on
 # scaled rows; the held impact and I^- are rows of the program, so the plan's first velocity is
 # theirs to that; the equations of motion at the samples to 1e-4 N m (measured 2e-9).
+ENTRY = shutil.which("biped-gait", path=str(Path(sys.executable).parent))
 ROWS = 1e-4  # N m, N
 VELOCITY = 1e-6  # rad/s
 RATE = 100.0  # Hz: the walk's samples
@@ -127,6 +133,34 @@ def test_the_kept_start_holds_the_chains_dynamics_and_the_floors_margins(kept, k
     support, meta = kept_start
     assert meta["kind"] == "start"
     check_dynamics(planner, chain, support, meta, spline_mesh(support.duration, kind="start"))
+
+
+def test_the_plan_command_gives_the_kept_start_and_stop(kept, kept_start, tmp_path):
+    """``biped-gait plan --start-stop``: the JSON's start_phase and stop_phase are the kept plans in
+    the double support's layout (the plan's double_support_coordinates, as ``load_plan`` reads them),
+    the summary a line each; another gait's are refused with the reason (exit status 1); beside a
+    double support that lasts, one line and exit status 2."""
+    planner, _, _, _, stop, stop_meta = kept
+    out = tmp_path / "plan.json"
+    done = subprocess.run([ENTRY, "plan", "--start-stop", "--json", str(out)], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert f"start from standing: 2 s with both feet down, E = {kept_start[1]['effort_total']:.1f}" in done.stdout
+    assert f"stop to standing: 2 s with both feet down, E = {stop_meta['effort_total']:.1f}" in done.stdout
+    plan = json.loads(out.read_text())
+    for key, (support, meta) in (("start_phase", kept_start), ("stop_phase", (stop, stop_meta))):
+        phase = plan[key]
+        assert phase["success"] and phase["duration"] == meta["duration"] and phase["effort_total"] == meta["effort_total"]
+        assert np.array_equal(phase["t"], support.t) and np.array_equal(phase["X"], support.x)
+        assert np.array_equal(phase["torques"], support.torques)
+        assert len(phase["X"][0]) == len(plan["double_support_coordinates"])
+    other = subprocess.run([ENTRY, "plan", "--start-stop", "--alpha-deg", "20"], capture_output=True, text=True,
+                           timeout=120)
+    assert other.returncode == 1 and "admissible True" in other.stdout
+    assert "start from standing: refused: the start is planned with the gait L = 0.45 m" in other.stdout
+    lasting = subprocess.run([ENTRY, "plan", "--start-stop", "--double-support", "0.1"], capture_output=True,
+                             text=True, timeout=120)
+    assert lasting.returncode == 2 and lasting.stderr.count("\n") == 1 and "impulsive gait" in lasting.stderr
 
 
 def check_dynamics(planner, chain, support, meta, mesh) -> None:

@@ -12,6 +12,8 @@ from ..arguments import check_output_folder, request_fields
 from ..core.gait import views
 from ..core.gait.lasting_support import LastingSupport
 from ..core.gait.planner import GaitPlanner, GaitRequest, lasting_request, swing_request
+from ..core.walking.kept import check_phases_request, kept_phases
+from ..core.walking.orbit import PlannedOrbit
 from .output import check_json, write_json
 
 JSON_NAME = "plan.json"
@@ -26,6 +28,8 @@ def run(args: argparse.Namespace) -> int:
     request = GaitRequest(args.step_length, args.period, math.radians(args.alpha_deg), **fields)
     lasting = lasting_request(request, args.double_support)
     swing = swing_request(request, args.actuated_swing, args.double_support)
+    if args.start_stop:
+        check_phases_request(args.double_support, args.actuated_swing)
     planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
         gait = planner.plan_stride(request)
@@ -48,6 +52,11 @@ def run(args: argparse.Namespace) -> int:
         print(lasting_summary(support, limit.effort_total, gait.W))
         result["double_support_phase"] = views.double_support_phase(support, limit.effort_total)
         admissible = admissible and support.success
+    if args.start_stop and gait.usable:
+        start, stop = kept_phases(planner.model, PlannedOrbit.of(drawn))
+        print(phases_summary(start, stop))
+        result["start_phase"], result["stop_phase"] = (views.double_support_phase(p, math.nan) for p in (start, stop))
+        admissible = admissible and start.success and stop.success
     written = [write_json(args.json, result)]
     if args.out is not None:
         from ..studies.figures import plan_figure, save  # matplotlib only when a figure is asked
@@ -84,3 +93,17 @@ def lasting_summary(support: LastingSupport, limit_effort: float, paper_effort: 
             f"E(0+) = {limit_effort:.3f}, W = {paper_effort:.3f} N m s\n"
             f"  peak torques {peak} N m; friction used {support.friction_used:.3f}; IPOPT {support.iterations} "
             f"iterations, {support.solve_time_s:.2f} s")
+
+
+def phases_summary(start: LastingSupport, stop: LastingSupport) -> str:
+    """A line each on the gait's start from standing and its stop to standing."""
+    lines = []
+    for kind, phase in (("start from standing", start), ("stop to standing", stop)):
+        if not phase.success:
+            lines.append(f"{kind}: refused: {phase.message}")
+            continue
+        impulses = abs(phase.i_plus if kind.startswith("start") else phase.i_minus).sum()
+        lines.append(f"{kind}: {phase.duration:g} s with both feet down, E = {phase.effort_total:.1f} N m s "
+                     f"({'I+' if kind.startswith('start') else 'I-'} {impulses:.1f}, torques {phase.effort_l1:.1f}); "
+                     f"peak torque {phase.peak_torque.max():.0f} N m, friction used {phase.friction_used:.3f}")
+    return "\n".join(lines)

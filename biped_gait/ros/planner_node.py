@@ -3,7 +3,8 @@
 - service ``~/plan_gait`` (biped_gait_interfaces/srv/PlanGait): plan one gait; with
   ``double_support`` > 0, its periodic cycle with a double support that lasts, with
   ``actuated_swing`` > 0 the cycle whose swing is actuated at its two ends (each an IPOPT solve of
-  seconds to minutes, on a thread of its own: the node serves the rest meanwhile);
+  seconds to minutes, on a thread of its own: the node serves the rest meanwhile); with
+  ``start_stop``, its start from standing and stop to standing (the package's kept ones);
 - action ``~/optimize_arm_swing`` (biped_gait_interfaces/action/OptimizeArmSwing): the arm
   amplitude of least effort, with feedback per amplitude evaluated; cancelable;
 - topic ``~/gait_plan`` (biped_gait_interfaces/msg/GaitPlan): every successful plan, reliable,
@@ -62,6 +63,8 @@ from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_
 from ..core.gait import views
 from ..core.gait.planner import SEED, GaitPlanner, GaitRequest, lasting_request, swing_request
 from ..core.dynamics.settings import DEFAULTS
+from ..core.walking.kept import check_phases_request, kept_phases
+from ..core.walking.orbit import PlannedOrbit
 from ..core.model.text import clip
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
@@ -325,9 +328,12 @@ class GaitPlannerNode(Node):
         only the margins says so) and, when the atlas knows, where the nearest admissible gaits are.
         With ``double_support`` > 0, the gait's cycle with that double support too (``_lasting``);
         with ``actuated_swing`` > 0, the cycle whose swing is actuated at its two ends (the one a walk
-        tracks, ``swing_request``'s ``walkable``), with that double support."""
+        tracks, ``swing_request``'s ``walkable``), with that double support; with ``start_stop``, the
+        gait's start from standing and stop to standing (``kept.kept_phases``: the package's, or refused
+        with the reason)."""
         fields = self._fields(request, (*POINT_NAMES, *OPTION_NAMES))
-        key = request_key({**fields, "double_support": request.double_support, "actuated_swing": request.actuated_swing})
+        key = request_key({**fields, "double_support": request.double_support, "actuated_swing": request.actuated_swing,
+                           "start_stop": request.start_stop})
         cached = self._cached(self._cache, key)
         if cached is not None:
             self.stats.count("cache_hits")
@@ -339,6 +345,8 @@ class GaitPlannerNode(Node):
         core_request = GaitRequest(**fields)
         lasting = lasting_request(core_request, request.double_support)
         swing = swing_request(core_request, request.actuated_swing, request.double_support, walkable=True)
+        if request.start_stop:
+            check_phases_request(request.double_support, request.actuated_swing)
         planner = self._planner(core_request.params, "service")
         joints = urdf_joints(planner.model)
         if math.isfinite(core_request.turn_radius):
@@ -361,6 +369,12 @@ class GaitPlannerNode(Node):
             solve_time += seconds
             response.success = response.success and solved
             response.message = f"{response.message}; {said}"
+        if request.start_stop and gait.usable:
+            first = gait.steps[0] if math.isfinite(core_request.turn_radius) else gait
+            phases = kept_phases(planner.model, PlannedOrbit.of(first))
+            plan.start_phase, plan.stop_phase = (phase_msg(views.double_support_phase(p, math.nan)) for p in phases)
+            response.success = response.success and all(p.success for p in phases)
+            response.message += "".join(f"; {kind}: {p.message}" for kind, p in zip(("start", "stop"), phases))
         self.stats.count("solves")
         self.stats.time(solve_time)
         answer = CachedAnswer(response.success, response.message, plan, without_trajectory(plan), tuple(next_steps),

@@ -29,7 +29,8 @@ arrays and their messages are serialized at once (``walk_messages``). Controls: 
 ``~/resume``, ``~/reset`` and the step counter ``~/iterations`` (``sim_controls``). Every stamp
 and log time is on one clock, the simulated time (``SimClock.now_ns``).
 
-Standing, starting and stopping: with ``initial_state`` ``standing`` the robot stands at rest,
+Standing, starting and stopping: with ``initial_state`` ``standing`` (the default; ``walking``
+begins on the gait's orbit, in mid-stride, at the start of a step) the robot stands at rest,
 both feet down, held by the core's balance controller (``core/walking/phases/standing.py``; in
 MuJoCo by its own contacts with friction), for ``stand_duration`` s (0: until stopped), publishing and recording as a
 walk does (``/gait_phase`` ``STANDING``, ``/odom`` at rest); pushes act on it with both feet held.
@@ -164,7 +165,8 @@ PARAMETERS = (
     *GAIT_PARAMETERS,
     Param("optimize_arms", False, "ask the planner's action for the optimal arm amplitude (on its default range) "
           "and walk that, instead of arm_amplitude (true/false)"),
-    Param("steps", 20, "steps to walk (count); 0: until stopped", 0, 1000000),
+    Param("steps", 0, "steps to walk (count; a walk that began standing counts from its start); 0: until stopped",
+          0, 1000000),
     Param("real_time_factor", 1.0, "simulated seconds per wall second; 0: as fast as possible", 0.0, 1000.0),
     Param("publish_rate", 500.0, "samples per second of simulated time (Hz)", 1.0, 100000.0),
     Param("engine", ENGINES[0], "what integrates the walk: 'hybrid' (the planner's model, impulsive double "
@@ -189,11 +191,11 @@ PARAMETERS = (
           choices=("momentum", "duration")),
     Param("momentum_rate", DEFAULT_RATE, "with recovery 'momentum': the momentum error's contraction per step "
           "(0: dead-beat)", 0.0, 0.99),
-    Param("initial_state", INITIAL_STATES[0], "how the walk begins: 'walking' (on the gait's orbit, at the start of "
-          "a step) or 'standing' (at rest, both feet down, held by the balance controller for stand_duration, "
-          "in either engine). /cmd_vel starts a standing robot where a start is kept for its gait (the hybrid "
-          "engine, the default gait: docs/model.md section 14.3), else is refused with the physical reason "
-          "(section 8.10)", choices=INITIAL_STATES),
+    Param("initial_state", "standing", "how the walk begins: 'standing' (at rest, both feet down, held by the "
+          "balance controller for stand_duration, in either engine) or 'walking' (on the gait's orbit, in "
+          "mid-stride at the start of a step). /cmd_vel starts a standing robot where a start is kept for its gait "
+          "(the hybrid engine, the default gait: docs/model.md section 14.3), else is refused with the physical "
+          "reason (section 8.10)", choices=INITIAL_STATES),
     Param("stand_duration", 0.0, "with initial_state 'standing', or after a walk's stop (/cmd_vel 0): how long the "
           "robot stands (s of simulated time, to the next 0.1 s); 0: until stopped. steps counts the steps of a walk",
           0.0, 1e6),

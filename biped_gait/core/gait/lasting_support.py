@@ -69,3 +69,12 @@ class LastingSupport:
                 if np.linalg.norm(f) > floor:
                     ratios.append(np.hypot(f[0], f[1]) / f[2] if f[2] > 0 else math.inf)
         return float(max(ratios))
+
+
+def refused_support(message: str) -> LastingSupport:
+    """No phase, ``message`` saying why: duration 0, every array empty, every figure 0 (the
+    GaitPlan's phases read so where there is none)."""
+    empty = np.zeros(0)
+    rows = np.zeros((0, 0))
+    return LastingSupport(0.0, False, message, empty, rows, rows, rows, rows, np.zeros((0, 2, 3)), empty, empty,
+                          np.zeros((0, 3)), 0.0, 0.0, 0.0, 0, 0.0)

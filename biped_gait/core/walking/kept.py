@@ -13,13 +13,15 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..dynamics.closed_chain import ClosedChain
 from ..dynamics.hybrid import HybridStep
+from ..gait.lasting_support import LastingSupport, refused_support
 from ..gait.spline_support import kept_path, load_plan
+from ..model.biped import BipedModel
 from ..model.params import BipedParams, load_params
 from .balance import Balance, balance, standing_pose
 from .held_support import HeldSupport, held_support
@@ -95,6 +97,35 @@ def kept_gait(kind: str = "stop") -> KeptGait | None:
     with np.load(path) as kept:
         meta = json.loads(str(kept["meta"]))
     return KeptGait(kind, load_params(None), meta["L"], meta["T"], meta["alpha"], meta["mode"])
+
+
+def check_phases_request(double_support: float, actuated_swing: float) -> None:
+    """``ValueError`` (one line) for a start and stop asked beside a double support that lasts or a
+    swing actuated at its ends: the package keeps those of the paper's impulsive gait."""
+    for name, value in (("double_support", double_support), ("actuated_swing", actuated_swing)):
+        if value != 0.0:
+            raise ValueError(f"start_stop: the start and the stop kept are of the paper's impulsive gait, not with "
+                             f"{name} {value:g} s")
+
+
+def kept_phases(bm: BipedModel, orbit: PlannedOrbit) -> tuple[LastingSupport, LastingSupport]:
+    """The start from standing and the stop to standing that the package keeps for ``orbit``'s gait,
+    as double supports of the model ``bm`` (``load_plan``; a plan's ``start_phase`` and
+    ``stop_phase``), each refused with the reason (``refused_support``, ``KeptGait.why_not``) where
+    none is kept for that gait. Milliseconds: read from the package's files (their ``solve_time_s``
+    0, their ``iterations`` the last stage's; planning another gait's takes a continuation of an
+    hour, ``studies/spline_study.py``; docs/model.md 14.3)."""
+    phases = []
+    for kind in ("start", "stop"):
+        gait = kept_gait(kind)
+        why = f"the package keeps no {kind}" if gait is None else gait.why_not(orbit)
+        if why:
+            phases.append(refused_support(why))
+            continue
+        support, meta = load_plan(kept_path(kind), bm)
+        said = f"{support.message} (kept in the package: planned {meta['date']} at {meta['commit']})"
+        phases.append(replace(support, message=said))
+    return phases[0], phases[1]
 
 
 def kept_plan(hybrid: HybridStep, kind: str = "stop") -> KeptPlan:
