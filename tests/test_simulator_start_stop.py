@@ -2,7 +2,7 @@
 linear.x 0 during the default walk stops it at the next touchdown (the kept stop, docs/model.md
 section 14.2) and the robot stands, /odom falling to rest; no /cmd_vel for cmd_vel_timeout after a
 command walks it back to the stop's gait and stops it too; standing, /cmd_vel 0.6 m/s starts it
-(the kept start, section 14.3), it walks, and 0 stops it standing again. (A start refused from
+(the kept start, section 14.3), it walks, and 0 stops it standing again; then both once more. (A start refused from
 standing: tests/test_simulator_standing.py.)"""
 
 from __future__ import annotations
@@ -140,42 +140,58 @@ def test_no_cmd_vel_for_the_timeout_is_a_command_of_0(planner_node, tmp_path):
     assert [phase.phase for phase in phases][-2:] == [GaitPhase.STOPPING, GaitPhase.STANDING]
 
 
-def test_from_standing_cmd_vel_starts_walks_and_stops(planner_node, tmp_path):
+def test_from_standing_cmd_vel_starts_walks_and_stops_twice(planner_node, tmp_path):
     """The simulator as it starts by default (its initial_state and steps; unpaced here, and not
-    recording) stands in the kept start's posture; /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s), the
-    gait's stances, the walk slowing to 0.6 m/s; then 0: it walks back to the stop's gait, stops and
-    stands. /odom's speed rises from 0 and returns to it (under 1e-3 m/s over the last 2 s); no fall."""
+    recording) stands in the kept start's posture; /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s),
+    the gait's stances, the walk slowing to 0.6 m/s; then 0: it walks back to the stop's gait, stops
+    and stands; then 0.6 again starts it again (as a Teleop panel's second press), and 0 stops it
+    again. /odom's speed rises from 0 and returns to it (under 1e-3 m/s over 2 s) each time; no fall."""
     side = ClientSide("start_test_client")
     events: list[GaitEvent] = []
     phases: list[GaitPhase] = []
     odom: list[Odometry] = []
     log_file = tmp_path / "biped-gait-simulator.log"
+
+    def count(phase: int) -> int:
+        return sum(p.phase == phase for p in phases)
+
+    def touchdowns() -> int:
+        return sum(e.kind == GaitEvent.TOUCHDOWN for e in events)
+
     try:
         pub = _listen(side, events, phases, odom)
         proc = start_simulator(tmp_path, PLANNER, "real_time_factor:=0.0", "record:=false", "wait_for_subscribers:=1",
-                               f"stand_duration:={STAND}", "cmd_vel_timeout:=0.0", initial_state=None)
+                               "cmd_vel_timeout:=0.0", initial_state=None)
         side.wait(lambda: odom, 60.0)
-        pub.publish(Twist(linear=Vector3(x=0.6)))
-        side.wait(lambda: sum(e.kind == GaitEvent.TOUCHDOWN for e in events) >= 12, 180.0)
-        pub.publish(Twist(linear=Vector3(x=0.0)))
-        _to_the_end(side, events, odom, 240.0)
+        for walk in (1, 2):
+            pub.publish(Twist(linear=Vector3(x=0.6)))
+            side.wait(lambda: count(GaitPhase.STARTING) == walk and touchdowns() >= 8 * walk, 180.0)
+            pub.publish(Twist(linear=Vector3(x=0.0)))
+            side.wait(lambda: count(GaitPhase.STANDING) == walk + 1, 240.0)
+            standing_at = _stamp(phases[-1])
+            side.wait(lambda: odom and _stamp(odom[-1]) >= standing_at + STAND, 60.0)
         assert stop_node(proc) == 0
     finally:
         side.close()
     log = log_file.read_text()
-    said = next(line for line in log.splitlines() if "starting onto the gait" in line)
-    print("\n" + said)
+    said = [line for line in log.splitlines() if "starting onto the gait" in line]
+    print("\n" + said[0])
+    assert len(said) == 2 and "refused" not in log
     assert not [e for e in events if e.kind == GaitEvent.FALL]
     kinds = [phase.phase for phase in phases]
     assert kinds[:2] == [GaitPhase.STANDING, GaitPhase.STARTING]
     assert GaitPhase.LEFT_STANCE in kinds and GaitPhase.RIGHT_STANCE in kinds
+    second = kinds.index(GaitPhase.STARTING, 2)
+    assert kinds[second - 2:second + 1] == [GaitPhase.STOPPING, GaitPhase.STANDING, GaitPhase.STARTING]
     assert kinds[-2:] == [GaitPhase.STOPPING, GaitPhase.STANDING]
     started = _stamp(phases[1])
     resting = [_speed(m) for m in odom if _stamp(m) < started]
     assert resting and max(resting) < STILL  # at rest before the start
-    assert max(_speed(m) for m in odom) > 0.5  # it walked
-    end = _stamp(odom[-1])
-    still = [_speed(m) for m in odom if _stamp(m) > end - 2.0]
-    assert len(still) > 10 and max(still) < STILL
+    for standing, starting in ((phases[second - 1], phases[second]), (phases[-1], None)):
+        begun, until = _stamp(standing), _stamp(starting) if starting else _stamp(odom[-1])
+        still = [_speed(m) for m in odom if until - 2.0 < _stamp(m) <= until and _stamp(m) > begun]
+        assert len(still) > 10 and max(still) < STILL, (begun, until)
+    walking = [_speed(m) for m in odom if _stamp(m) > _stamp(phases[second])]
+    assert max(walking) > 0.5  # it walked again
     print(f"/odom: at most {max(resting):.2g} m/s before the start, {max(_speed(m) for m in odom):.2f} walking, "
           f"{max(still):.2g} over the last 2 s")

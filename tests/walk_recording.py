@@ -25,7 +25,8 @@ def own_planner(where: Path, name: str, record: bool = False) -> Iterator[None]:
 def record_walk(where: Path, planner: str, steps: int) -> Path:
     """Walk ``steps`` steps as fast as possible on the plan of ``planner``; the recording's directory."""
     proc = start_node("biped-gait-simulator", "-p", f"plan_service:=/{planner}/plan_gait",
-                      "-p", f"optimize_action:=/{planner}/optimize_arm_swing", "-p", f"steps:={steps}",
+                      "-p", f"optimize_action:=/{planner}/optimize_arm_swing", "-p", "initial_state:=walking",
+                      "-p", f"steps:={steps}",
                       "-p", "real_time_factor:=0.0", "-p", "exit_when_done:=true",
                       "-p", f"record_dir:={where / 'bags'}", cwd=where)
     assert proc.wait(timeout=120) == 0, (where / "biped-gait-simulator.log").read_text()

@@ -19,8 +19,8 @@ touchdown of the next step that aims at that gait and starts within ``kept.SETTL
 (``Walker.stop``: the stop's 2 s of double support, then standing, docs/model.md section 14.2; a
 walk still settling after a push walks on, said once, its error falling fourfold a step); from
 another gait it is first walked back to that gait's speed, then aimed at the gait itself (one
-transition step). Then the robot stands and
-commands are refused as while standing. **Elsewhere** the command is walked as the slowest gait of
+transition step). Then the robot stands, as a walk that began standing: a command to walk
+starts it again where a start of that gait is kept (below). **Elsewhere** the command is walked as the slowest gait of
 the envelope, and once the walk is there (straight, at its command) the core plans the stop step
 from that gait, the one that walks (``start_stop.plan_stop``, in a thread of its own, once per gait
 and walk) and says why it cannot be made (for the shipped parameter sets it cannot: docs/model.md
@@ -32,7 +32,8 @@ last. A reset starts a new walk (``start``).
 
 **Standing** (the walk begins standing): no follower and no envelope. **Where a start is kept**
 (the hybrid engine's walk of the default parameter set on the gait the package keeps a start of,
-made ready in a thread with the stop when the walk begins): a command of at least ``STOP_SPEED``
+made ready in a thread with the stop when the walk begins standing, or during a stop's double
+support): a command of at least ``STOP_SPEED``
 starts the walk before its next standing phase (``Walker.start``: the start's 2 s of double
 support, then I^+ onto the gait, docs/model.md section 14.3), then the follower is made and walks
 the command from the gait. **Elsewhere** a command that is not 0 asks for a start onto the walk's
@@ -66,6 +67,7 @@ from ..core.model.params import BipedParams, load_params
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
 from ..core.walking.kept import KeptPlan, Unsettled, kept_gait, kept_plan
+from ..core.walking.phases.standing import Standing
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
 from ..core.walking.runner import Walker
@@ -106,6 +108,7 @@ class SpeedCommand:
         self._preparing: threading.Thread | None = None  # making the kept stop (and start) ready, until joined
         self._start: KeptPlan | None = None  # the kept start onto the standing walk's gait, once made ready
         self._start_asked: tuple[float, float] | None = None  # the command that asks the standing walk to start
+        self._start_waits = False  # said that the start waits for the robot to settle
         self._source: str | None = None  # the walk's parameter set as given
         self._startable = False  # the walk stands and a start onto its gait is kept
         self._walk = 0  # which walk this is: a start or stop planned for an earlier one is not said
@@ -128,16 +131,16 @@ class SpeedCommand:
         gait (made ready in a thread), else is refused; ``stoppable``: the walk can take a kept stop
         and start (the hybrid engine's paper walk), made ready in a thread (module docstring)."""
         self._last, self._lapsed, self._stop_asked, self._stop_home, self._stop_waits = None, False, False, False, False
+        self._start_waits = False
         with self._lock:
             self._walk, self._ended = self._walk + 1, False
             self._explained.clear()
             self._stop, self._stop_gait, self._preparing = None, None, None
             self._start, self._start_asked, self._source = None, None, source
         start = kept_gait("start")
-        startable = standing and stoppable and start is not None and not start.why_not(walker.orbit)
-        self._startable = startable
+        startable = self._startable = standing and stoppable and start is not None and not start.why_not(walker.orbit)
         if stoppable and (startable or not standing):  # a standing walk that cannot start needs no stop
-            self._preparing = self._prepare(walker.orbit, source, startable)
+            self._preparing = self._prepare(walker.orbit, source, ("start", "stop") if startable else ("stop",))
         if standing:
             with self._lock:
                 self.follower, self._standing, pending = None, walker, self._pending
@@ -174,15 +177,14 @@ class SpeedCommand:
             self.follower, self._standing, self._pending = None, None, None
             self._walk, self._ended = self._walk + 1, True
 
-    def _prepare(self, gait: PlannedOrbit, source: str | None, startable: bool) -> threading.Thread:
-        """The thread that makes the kept stop of ``gait`` ready, and with ``startable`` its kept start,
-        on a model of its own (Pinocchio's data are the walk thread's); none if the package keeps none
-        of that gait."""
+    def _prepare(self, gait: PlannedOrbit, source: str | None, kinds: tuple[str, ...]) -> threading.Thread:
+        """The thread that makes the kept ``kinds`` (start, stop) of ``gait`` ready, on a model of its
+        own (Pinocchio's data are the walk thread's); none if the package keeps none of that gait."""
         walk = self._walk
 
         def prepare() -> None:
             hybrid = None
-            for kind in ("start", "stop") if startable else ("stop",):
+            for kind in kinds:
                 try:
                     hybrid = hybrid or HybridStep(BipedModel.from_params(load_params(source)))
                     plan = kept_plan(hybrid, kind)
@@ -321,21 +323,30 @@ class SpeedCommand:
         """Start the standing walk onto its gait (the kept start, once ready), then follow the command
         that asked for it (module docstring)."""
         logger = self.node.get_logger()
+        if not isinstance(walker.phase, Standing):  # a stop's double support: asked again once it stands
+            return
         if self._preparing is not None:
             self._preparing.join()
             self._preparing = None
         with self._lock:
             start, (speed, yaw_rate) = self._start, self._start_asked
-            self._start_asked = None
         if start is None:
+            self._start_asked = None
             self._explain("start", walker.orbit, walker.bm.params, "speed command: cannot start from standing onto",
                           "standing on")
             return
         try:
             walker.start(start)
+        except Unsettled as exc:  # a push: the balance brings it back, asked again before the next 0.1 s
+            if not self._start_waits:
+                self._start_waits = True
+                logger.info(f"speed command: {speed:g} m/s: {exc}: standing until it has settled")
+            return
         except ValueError as exc:
+            self._start_asked = None
             logger.warn(f"speed command: {exc}; standing on")
             return
+        self._start_asked, self._start_waits = None, False
         logger.info(f"speed command: {speed:g} m/s: starting onto the gait L = {start.step_length:g} m, T = "
                     f"{start.period:g} s (the kept start: {start.plan.duration:g} s with both feet down, then I^+), "
                     "then following the command")
@@ -364,8 +375,12 @@ class SpeedCommand:
             logger.info(f"speed command: 0 m/s: stopping at the touchdown of step {walker.state.step} (the kept stop "
                         f"of the gait L = {stop.step_length:g} m, T = {stop.period:g} s: {stop.plan.duration:g} s with "
                         "both feet down), then standing")
+            start = kept_gait("start")  # standing after the stop, a command starts it again where one is kept
+            startable = start is not None and not start.why_not(gait)
             with self._lock:
-                self.follower, self._standing = None, walker
+                self.follower, self._standing, self._startable = None, walker, startable
+            if startable and self._start is None:  # made ready while the stop's double support runs
+                self._preparing = self._prepare(gait, self._source, ("start",))
             return True
         home = gait.step_length / gait.period
         if not self._stop_home:
