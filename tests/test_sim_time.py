@@ -2,7 +2,8 @@
 advances with the simulation and nodes with use_sim_time (a subscriber's, the planner) follow
 it; /tf is received live and is what was recorded, byte for byte; the recording's metadata
 opens in rosbags with every topic's QoS and the type hashes rclpy reports; pause, resume and
-reset; the Foxglove live view answers a plain websocket client."""
+reset; the Foxglove live view answers a plain websocket client, and what a client publishes on
+/cmd_vel (as Foxglove's Teleop panel does) reaches the graph."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ import json
 import re
 import struct
 import time
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Callable
 
@@ -22,6 +25,7 @@ import numpy as np
 import rclpy
 import websockets
 import yaml
+from geometry_msgs.msg import Twist
 from mcap.reader import make_reader
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
@@ -36,6 +40,7 @@ from std_srvs.srv import Trigger
 from tf2_msgs.msg import TFMessage
 
 from biped_gait.ros.client import ClientSide, plan_request
+from biped_gait.ros.teleop import client_twist
 from biped_gait_interfaces.msg import AngularMomentum
 from biped_gait_interfaces.srv import PlanGait
 
@@ -182,13 +187,7 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
                      "live_view_port:=0")
     log = tmp_path / "biped-gait-simulator.log"
     try:
-        deadline = time.monotonic() + 60.0
-        while not (match := re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text())) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        assert match, log.read_text()
-        while "walking L =" not in log.read_text() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        port = int(match.group(1))
+        port = live_view_port(log, "walking L =")
         channels, received = asyncio.run(foxglove_client(port, until=counted))
         both, _ = asyncio.run(foxglove_client(port, ["foxglove.websocket.v1", "foxglove.sdk.v1"]))
         with pytest.raises(websockets.InvalidStatus) as refused:
@@ -212,6 +211,18 @@ def test_the_live_view_answers_a_websocket_client(planner_node, tmp_path):
     assert odom is None or deserialize_message(odom[0], Odometry).header.frame_id == "odom"
 
 
+def live_view_port(log: Path, ready: str) -> int:
+    """The port of the simulator's live view once its log (``log``) gives it, waiting then until
+    the log says ``ready`` (120 s in all at most)."""
+    deadline = time.monotonic() + 120.0
+    while not (match := re.search(r"ws://127\.0\.0\.1:(\d+)", log.read_text())) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert match, log.read_text()
+    while ready not in log.read_text() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    return int(match.group(1))
+
+
 COUNTER = "/biped_gait_simulator/iterations"  # the step counter: latched, then published 10 times a second
 
 
@@ -221,6 +232,19 @@ def counted(received: dict[str, list[bytes]]) -> bool:
     return any(deserialize_message(m, UInt64).data > 0 for m in received.get(COUNTER, []))
 
 
+@asynccontextmanager
+async def foxglove_session(port: int, subprotocols: tuple[str, ...] = ("foxglove.sdk.v1",),
+                           ) -> AsyncIterator[tuple[websockets.ClientConnection, dict]]:
+    """A connection with the Foxglove protocol offering ``subprotocols`` (the server selects
+    foxglove.sdk.v1) and the server's first message, its serverInfo. What the server sends is
+    queued without bound: a client that reads only at times is not throttled."""
+    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=list(subprotocols), max_queue=None) as ws:
+        assert ws.subprotocol == "foxglove.sdk.v1"
+        info = json.loads(await asyncio.wait_for(ws.recv(), 30.0))
+        assert info["op"] == "serverInfo", info
+        yield ws, info
+
+
 async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.sdk.v1",),
                           wanted: tuple[str, ...] = ("/robot_description", "/diagnostics"),
                           until: Callable[[dict[str, list[bytes]]], bool] = lambda received: True,
@@ -228,8 +252,7 @@ async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.
     """Connect with the Foxglove protocol offering ``subprotocols``, subscribe to every channel,
     and collect messages until 10 joint states and one of each ``wanted`` topic have come and
     ``until`` holds of them, or for 60 s at most: (topic -> channel, topic -> payloads)."""
-    async with websockets.connect(f"ws://127.0.0.1:{port}", subprotocols=list(subprotocols)) as ws:
-        assert ws.subprotocol == "foxglove.sdk.v1"
+    async with foxglove_session(port, subprotocols) as (ws, _info):
         channels: dict[str, dict] = {}
         while "/joint_states" not in channels:
             message = await asyncio.wait_for(ws.recv(), 30.0)  # the server's time (binary op 2) may come first
@@ -247,6 +270,92 @@ async def foxglove_client(port: int, subprotocols: tuple[str, ...] = ("foxglove.
                 _, subscription, _ = struct.unpack_from("<BIQ", message)
                 received.setdefault(topics[subscription], []).append(message[13:])
         return channels, received
+
+
+def test_foxglove_teleop_publishes_cmd_vel_through_the_live_view(planner_node, side, tmp_path):
+    """Foxglove's Teleop panel's way of steering: a client advertises /cmd_vel (geometry_msgs/msg/Twist
+    in JSON, the server offering client publishing in JSON alone) and sends a Twist of 0.6 m/s; a
+    plain subscriber of the test gets it from the graph, and so does the simulator, which refuses it
+    while standing (a gait with no kept start: the refusal's reason, planned in a second or two).
+    A message on another topic and malformed JSON are refused with one log line each, sent twice,
+    and the node serves on."""
+    commands: list[Twist] = []
+    side.node.create_subscription(Twist, "/cmd_vel", commands.append, 10)
+    proc = simulator(tmp_path, "initial_state:=standing", "arm_amplitude:=0.4", "live_view:=true", "live_view_port:=0",
+                     "record:=false", "real_time_factor:=1.0")
+    log = tmp_path / "biped-gait-simulator.log"
+    refusal = "speed command 0.6 m/s, 0 rad/s refused while standing"
+
+    def relayed_and_refused() -> bool:
+        pause = time.monotonic() + 0.1
+        side.wait(lambda: time.monotonic() > pause)  # the test's subscriber takes what came meanwhile
+        return bool(commands) and refusal in log.read_text()
+
+    try:
+        port = live_view_port(log, "speed command: the robot stands")
+        bad = [client_message(2, b'{"linear": {"x": 0.6}}'), client_message(1, b'{"linear": ')]
+        info = asyncio.run(teleop_client(port, bad + bad, client_message(1, json.dumps(TWIST_06).encode()),
+                                         relayed_and_refused))
+        served_on = proc.poll() is None
+    finally:
+        assert stop_node(proc) == 0, log.read_text()
+    text = log.read_text()
+    assert "clientPublish" in info["capabilities"] and info["supportedEncodings"] == ["json"]
+    assert commands and commands[0].linear.x == 0.6 and commands[0].angular.z == 0.0, commands
+    assert served_on and text.count(refusal) == 1, text
+    refused = [line for line in text.splitlines() if "a client's message on" in line]
+    print("\n" + "\n".join(refused))
+    assert len(refused) == 2, text
+    assert any("a client's message on /foo refused: clients may publish /cmd_vel alone" in line for line in refused)
+    assert any("a client's message on /cmd_vel refused: malformed JSON" in line for line in refused)
+
+
+def test_what_a_client_may_publish():
+    """``client_twist``: a Twist in JSON on /cmd_vel under either schema name Foxglove uses is
+    taken (JSON's NaN too: the speed command refuses it); the rest is refused with its reason."""
+    twist = json.dumps(TWIST_06).encode()
+    assert client_twist("/cmd_vel", "geometry_msgs/Twist", "json", twist).linear.x == 0.6
+    nan = twist.replace(b"0.6", b"NaN")
+    schema = "geometry_msgs/msg/Twist"
+    assert np.isnan(client_twist("/cmd_vel", schema, "json", nan).linear.x)
+    refused = {("/foo", schema, "json", twist): "clients may publish /cmd_vel alone",
+               ("/cmd_vel", "std_msgs/msg/String", "json", twist): "schema 'std_msgs/msg/String'",
+               ("/cmd_vel", schema, "cdr", twist): "encoding 'cdr'",
+               ("/cmd_vel", schema, "json", b"[" * 100_000): "malformed JSON (nested too deeply)",
+               ("/cmd_vel", schema, "json", b"[0.6]"): "not a JSON object",
+               ("/cmd_vel", schema, "json", twist.replace(b'"x": 0.6, ', b"")): "linear.x is missing",
+               ("/cmd_vel", schema, "json", twist.replace(b"0.6", b'"0.6"')): "linear.x is not a number",
+               ("/cmd_vel", schema, "json", twist.replace(b"0.6", b"1" * 400)): "beyond a double's range"}
+    for message, reason in refused.items():
+        with pytest.raises(ValueError, match=re.escape(reason)):
+            client_twist(*message)
+
+
+TWIST_06 = {"linear": {"x": 0.6, "y": 0.0, "z": 0.0}, "angular": {"x": 0.0, "y": 0.0, "z": 0.0}}  # every field, as Teleop sends it
+TELEOP_CHANNELS = [{"id": 1, "topic": "/cmd_vel", "encoding": "json", "schemaName": "geometry_msgs/msg/Twist"},
+                   {"id": 2, "topic": "/foo", "encoding": "json", "schemaName": "geometry_msgs/msg/Twist"}]
+
+
+def client_message(channel: int, payload: bytes) -> bytes:
+    """A client's message data (binary, opcode 0x01): the channel's id (uint32 LE), then the payload."""
+    return struct.pack("<BI", 1, channel) + payload
+
+
+async def teleop_client(port: int, once: list[bytes], command: bytes, until: Callable[[], bool]) -> dict:
+    """As Foxglove's Teleop panel: advertise ``TELEOP_CHANNELS``, send each of ``once`` (client
+    messages), then ``command`` at about 5 Hz until ``until()`` holds (120 s at most; DDS may
+    match the simulator's publisher with a subscriber after the first): the server's serverInfo."""
+    async with foxglove_session(port) as (ws, info):
+        await ws.send(json.dumps({"op": "advertise", "channels": TELEOP_CHANNELS}))
+        for message in once:
+            await ws.send(message)
+        deadline = time.monotonic() + 120.0
+        while time.monotonic() < deadline:
+            await ws.send(command)
+            await asyncio.sleep(0.1)  # the connection reads what the server sent meanwhile
+            if until():
+                break
+        return info
 
 
 def test_live_view_and_recording_switched_at_run_time_and_the_walk_in_diagnostics(planner_node, side, tmp_path):

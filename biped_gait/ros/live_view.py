@@ -5,6 +5,12 @@ and the simulated time (the server's time capability). Foxglove, connected to
 on that topic) moving with ``/tf`` and ``/tf_static``, and plots ``/joint_states`` and
 ``/angular_momentum`` as the robot walks.
 
+Clients may publish (the protocol's client publishing, ``clientPublish``, as foxglove_bridge
+offers it) in JSON, the one encoding the server offers them (``supportedEncodings``): so does
+Foxglove's Teleop panel, its geometry_msgs/Twist on ``/cmd_vel``. Each message a client publishes goes to
+the view's owner (``on_message``: its topic, schema name, encoding and bytes, by the channel the
+client advertised), which takes or refuses it (``teleop``); the view itself knows no ROS.
+
 Latched topics (transient-local: the robot description, the static transforms) are sent again
 to each client that subscribes to them, as a late ROS subscriber would get them. The server
 binds ``127.0.0.1`` unless told otherwise; it runs on threads of its own (Rust), and logging a
@@ -21,16 +27,24 @@ connect.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from ..recording.schemas import schema_text
 
 DEFAULT_PORT = 8765  # Foxglove's default for a WebSocket connection
+CLIENT_ENCODINGS = ["json"]  # what clients may publish in: Foxglove picks the first it knows (json, ros1, cdr)
+
+ClientMessage = Callable[[str, str, str, bytes], None]
+"""A message a client published: (topic, schema name, encoding, bytes)."""
 
 
 class LiveView:
-    """A Foxglove WebSocket server on ``host``:``port`` (0: any free port, see ``port``)."""
+    """A Foxglove WebSocket server on ``host``:``port`` (0: any free port, see ``port``); the
+    messages its clients publish go to ``on_message`` (called on the server's threads: it must
+    not raise)."""
 
-    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, name: str = "biped_gait") -> None:
+    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT, name: str = "biped_gait", *,
+                 on_message: ClientMessage) -> None:
         import foxglove
         from foxglove.websocket import Capability
 
@@ -39,8 +53,11 @@ class LiveView:
         self._channels: dict[str, object] = {}  # topic -> its foxglove.Channel
         self._latched: dict[str, tuple[bytes, int]] = {}  # topic -> its latest message and stamp (ns)
         self._closed = False  # a walk's step may still log to a view stopped at run time: dropped
+        self._on_message = on_message
+        self._advertised: dict[tuple[int, int], tuple[str, str, str]] = {}  # (client, channel): topic, schema, encoding
         self.server = foxglove.start_server(name=name, host=host, port=port, context=self._context,
-                                            capabilities=[Capability.Time], server_listener=_listener(self))
+                                            capabilities=[Capability.Time, Capability.ClientPublish],
+                                            supported_encodings=CLIENT_ENCODINGS, server_listener=_listener(self))
 
     @property
     def port(self) -> int:
@@ -79,6 +96,20 @@ class LiveView:
         if data:
             self._channels[topic].log(data, log_time=stamp)
 
+    def client_advertised(self, client: int, channel: int, topic: str, schema_name: str, encoding: str) -> None:
+        """Client ``client`` advertised its channel ``channel``: ``topic``, ``schema_name``, ``encoding``."""
+        self._advertised[(client, channel)] = (topic, schema_name, encoding)
+
+    def client_unadvertised(self, client: int, channel: int) -> None:
+        """Client ``client`` unadvertised its channel ``channel`` (it said so, or left)."""
+        self._advertised.pop((client, channel), None)
+
+    def client_message(self, client: int, channel: int, data: bytes) -> None:
+        """A message client ``client`` published on its channel ``channel``: to ``on_message``."""
+        what = self._advertised.get((client, channel))
+        if what is not None and not self._closed:
+            self._on_message(*what, data)
+
     def close(self) -> None:
         """Stop the server (its clients are disconnected); what is logged afterwards is dropped."""
         self._closed = True
@@ -86,11 +117,21 @@ class LiveView:
 
 
 def _listener(view: LiveView):
-    """The server's callbacks: a client's subscription to a latched topic gets its latest message."""
+    """The server's callbacks: a client's subscription to a latched topic gets its latest message;
+    the channels clients advertise, and what they publish on them, go to ``view``."""
     from foxglove.websocket import ServerListener
 
     class Listener(ServerListener):
         def on_subscribe(self, _client, channel) -> None:
             view.resend_latched(channel.topic)
+
+        def on_client_advertise(self, client, channel) -> None:
+            view.client_advertised(client.id, channel.id, channel.topic, channel.schema_name, channel.encoding)
+
+        def on_client_unadvertise(self, client, client_channel_id: int) -> None:
+            view.client_unadvertised(client.id, client_channel_id)
+
+        def on_message_data(self, client, client_channel_id: int, data: bytes) -> None:
+            view.client_message(client.id, client_channel_id, data)
 
     return Listener()

@@ -53,7 +53,9 @@ recovers by its per-step re-aim, with momentum steering (``recovery``). Engine: 
 topics, events and recording.
 Speed and turn: ``/cmd_vel`` (geometry_msgs/Twist in base_link: linear.x in m/s, angular.z in
 rad/s), walked with transition steps within the envelope published on ``~/velocity_envelope``
-(biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``).
+(biped_gait_interfaces/VelocityEnvelope, transient local; ``speed_command``). A live view's
+clients (Foxglove's Teleop panel) publish it too: the node puts their ``/cmd_vel`` on the graph
+(``teleop``), where its own subscription takes it as any other.
 
 ``/diagnostics`` (diagnostic_msgs/DiagnosticArray, every second): the walk's state, steps,
 falls, pushes and the recording. ``record`` and ``live_view`` can be set at run time (parameter
@@ -135,10 +137,12 @@ from .recorded import RecordedPublisher, finish_recording, raw_sender
 from .sim_clock import SimClock
 from .sim_controls import SimControls
 from .speed_command import SpeedCommand
+from .teleop import Teleop
 from .walk_messages import SampleMessages, event_msg, stamp_msg, tf_msg
 
 NODE_NAME = "biped_gait_simulator"
 LOG_PERIOD = 5.0  # s between the log lines of a long wait
+CMD_VEL_DEPTH = 10  # /cmd_vel's queue depth: the node's subscription, and its publisher of a live view's clients'
 LASTING_PATIENCE = 600.0  # s: the longest wait for a plan with a double support that lasts (the study's slowest: 138 s)
 RECORD_EVERY = 16  # samples published between two hand-overs to the recorder (a kill loses them at most)
 
@@ -220,8 +224,8 @@ PARAMETERS = (
     Param("exit_when_done", False, "end the process when the walk ends (true/false; the launcher sets it)"),
     Param("wait_for_subscribers", 0, "start walking once /joint_states has this many subscribers (count; "
           "discovery can take seconds)", 0, 100),
-    Param("live_view", False, "serve a Foxglove WebSocket live view of the walk (true/false; at run time: started "
-          "or stopped)", dynamic=True),
+    Param("live_view", False, "serve a Foxglove WebSocket live view of the walk, whose clients may publish /cmd_vel "
+          "(Foxglove's Teleop panel) (true/false; at run time: started or stopped)", dynamic=True),
     Param("live_view_host", "127.0.0.1", "address the live view's server binds (host; 0.0.0.0: every interface)"),
     Param("live_view_port", DEFAULT_PORT, "port of the live view's server (TCP port; 0: any free one)", 0, 65535),
     Param("wait_timeout", 60.0, "how long to wait for the planner's service or action, a plan on the topic, or "
@@ -259,6 +263,7 @@ class SimulatorNode(Node):
         self._outputs_lock = threading.Lock()  # run-time changes of the recording and the live view
         self.recorder: BackgroundRecorder | None = None
         self.live: LiveView | None = None
+        self.teleop: Teleop | None = None  # a live view's clients' /cmd_vel on the graph, from the first live view on
         self.walk_state = "starting"
         self.stats = Counters(("touchdowns", "falls", "pushes"))
         self.value = value = declare(self, PARAMETERS, self._on_parameter)
@@ -314,7 +319,7 @@ class SimulatorNode(Node):
         self.speed = SpeedCommand(self, value["speed_rule"], value["max_speed_change"], value["max_curvature"],
                                   value["max_curvature_change"], publisher, value["cmd_vel_timeout"],
                                   self.clock.now_ns, self.rtf)
-        self.create_subscription(Twist, topics.CMD_VEL, self.speed.on_twist, 10)
+        self.create_subscription(Twist, topics.CMD_VEL, self.speed.on_twist, CMD_VEL_DEPTH)
         self.create_service(Push, "~/push", self._on_push, callback_group=self._group)
         self.sampled = {topics.JOINT_STATES: self.pub_joints, topics.ODOM: self.pub_odom,
                         topics.ANGULAR_MOMENTUM: self.pub_momentum, topics.TF: self.pub_tf}
@@ -345,11 +350,14 @@ class SimulatorNode(Node):
         return recorder
 
     def _start_live_view(self) -> LiveView:
-        """The Foxglove live view on ``live_view_host``:``live_view_port``; ``ValueError`` (one
-        line) if its server cannot start (the port taken)."""
+        """The Foxglove live view on ``live_view_host``:``live_view_port``, its clients' /cmd_vel
+        published on the graph (``teleop``); ``ValueError`` (one line) if its server cannot start
+        (the port taken)."""
         host, port = self.value["live_view_host"], self.value["live_view_port"]
+        if self.teleop is None:
+            self.teleop = Teleop(self, CMD_VEL_DEPTH)
         try:
-            live = LiveView(host, port)
+            live = LiveView(host, port, on_message=self.teleop.on_message)
         except Exception as exc:  # noqa: BLE001  the SDK's error for a port taken, an address not here
             raise ValueError(f"live view not started on {host}:{port}: {clip(str(exc))}") from None
         self.get_logger().info(f"live view: open Foxglove on ws://{host}:{live.port}")
