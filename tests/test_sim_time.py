@@ -281,8 +281,8 @@ def test_foxglove_teleop_publishes_cmd_vel_through_the_live_view(planner_node, s
     and the node serves on."""
     commands: list[Twist] = []
     side.node.create_subscription(Twist, "/cmd_vel", commands.append, 10)
-    proc = simulator(tmp_path, "initial_state:=standing", "arm_amplitude:=0.4", "live_view:=true", "live_view_port:=0",
-                     "record:=false", "real_time_factor:=1.0")
+    proc = start_simulator(tmp_path, PLANNER, "arm_amplitude:=0.4", "live_view:=true", "live_view_port:=0",
+                           "record:=false", "real_time_factor:=1.0", initial_state=None)  # standing, the default
     log = tmp_path / "biped-gait-simulator.log"
     refusal = "speed command 0.6 m/s, 0 rad/s refused while standing"
 
