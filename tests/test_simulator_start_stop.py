@@ -21,7 +21,7 @@ from sensor_msgs.msg import JointState
 from biped_gait.ros.client import ClientSide
 from biped_gait_interfaces.msg import GaitEvent, GaitPhase
 
-from .ros_helpers import planner_process, start_simulator, stop_node
+from .ros_helpers import planner_process, read_bag, start_simulator, stop_node
 
 pytestmark = pytest.mark.ros
 
@@ -141,11 +141,12 @@ def test_no_cmd_vel_for_the_timeout_is_a_command_of_0(planner_node, tmp_path):
 
 
 def test_from_standing_cmd_vel_starts_walks_and_stops_twice(planner_node, tmp_path):
-    """The simulator as it starts by default (its initial_state and steps; unpaced here, and not
-    recording) stands in the kept start's posture; /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s),
-    the gait's stances, the walk slowing to 0.6 m/s; then 0: it walks back to the stop's gait, stops
-    and stands; then 0.6 again starts it again (as a Teleop panel's second press), and 0 stops it
-    again. /odom's speed rises from 0 and returns to it (under 1e-3 m/s over 2 s) each time; no fall."""
+    """The simulator as it starts by default (its initial_state and steps; unpaced here) stands in
+    the kept start's posture; /cmd_vel 0.6 m/s: STARTING (the kept start's 2 s), the gait's stances,
+    the walk slowing to 0.6 m/s; then 0: it walks back to the stop's gait, stops and stands; then 0.6
+    again starts it again (as a Teleop panel's second press), and 0 stops it again. /odom's speed
+    rises from 0 and returns to it (under 1e-3 m/s over 2 s) each time, as received and as recorded
+    (the MCAP read back by rosbags); no fall."""
     side = ClientSide("start_test_client")
     events: list[GaitEvent] = []
     phases: list[GaitPhase] = []
@@ -160,7 +161,7 @@ def test_from_standing_cmd_vel_starts_walks_and_stops_twice(planner_node, tmp_pa
 
     try:
         pub = _listen(side, events, phases, odom)
-        proc = start_simulator(tmp_path, PLANNER, "real_time_factor:=0.0", "record:=false", "wait_for_subscribers:=1",
+        proc = start_simulator(tmp_path, PLANNER, "real_time_factor:=0.0", "wait_for_subscribers:=1",
                                "cmd_vel_timeout:=0.0", initial_state=None)
         side.wait(lambda: odom, 60.0)
         for walk in (1, 2):
@@ -193,5 +194,11 @@ def test_from_standing_cmd_vel_starts_walks_and_stops_twice(planner_node, tmp_pa
         assert len(still) > 10 and max(still) < STILL, (begun, until)
     walking = [_speed(m) for m in odom if _stamp(m) > _stamp(phases[second])]
     assert max(walking) > 0.5  # it walked again
+    [bag] = list((tmp_path / "bags").iterdir())
+    recorded = read_bag(bag)
+    assert [m.phase for _, m in recorded["/gait_phase"]] == kinds
+    speeds = [(_stamp(m), _speed(m)) for _, m in recorded["/odom"]]
+    assert len(speeds) >= len(odom) and max(v for t, v in speeds if t < started) < STILL
+    assert max(v for _, v in speeds) > 0.5 and max(v for t, v in speeds if t > _stamp(odom[-1]) - 2.0) < STILL
     print(f"/odom: at most {max(resting):.2g} m/s before the start, {max(_speed(m) for m in odom):.2f} walking, "
           f"{max(still):.2g} over the last 2 s")
