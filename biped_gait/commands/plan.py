@@ -12,8 +12,6 @@ from ..arguments import check_output_folder, request_fields
 from ..core.gait import views
 from ..core.gait.lasting_support import LastingSupport
 from ..core.gait.planner import GaitPlanner, GaitRequest, lasting_request, swing_request
-from ..core.walking.kept import check_phases_request, kept_phases
-from ..core.walking.orbit import PlannedOrbit
 from .output import check_json, write_json
 
 JSON_NAME = "plan.json"
@@ -29,6 +27,9 @@ def run(args: argparse.Namespace) -> int:
     lasting = lasting_request(request, args.double_support)
     swing = swing_request(request, args.actuated_swing, args.double_support)
     if args.start_stop:
+        from ..core.walking.kept import check_phases_request, kept_phases  # the walk's modules only when asked
+        from ..core.walking.orbit import PlannedOrbit
+
         check_phases_request(args.double_support, args.actuated_swing)
     planner = GaitPlanner(args.params, modes=(request.mode,))  # one gait: one mode's atlas
     if math.isfinite(request.turn_radius):  # a stride of two steps on a circle
