@@ -24,8 +24,8 @@ def simulator_factor(where: Path, steps: int, parameters: list[str], tag: str = 
     suffix = f"_{tag}" if tag else ""
     planner = start_entry("biped-gait-planner", ["-p", "record:=false"], log=where / f"planner{suffix}.log", cwd=where)
     try:
-        options = ["initial_state:=walking", f"steps:={steps}", "real_time_factor:=0.0", f"publish_rate:={RATE}", "exit_when_done:=true",
-                   f"record_dir:={where}/bags", *parameters]
+        options = ["initial_state:=walking", f"steps:={steps}", "real_time_factor:=0.0", f"publish_rate:={RATE}",
+                   "exit_when_done:=true", f"record_dir:={where}/bags", *parameters]
         sim = start_entry("biped-gait-simulator", [arg for option in options for arg in ("-p", option)],
                           log=where / f"simulator{suffix}.log", cwd=where)
         sim.wait(timeout=timeout)

@@ -541,6 +541,7 @@ def test_the_start_and_stop_are_served_in_the_double_supports_layout(ros, planne
     nx, na = len(plan.double_support_coordinates), len(plan.actuated_joints)
     for phase, kind in ((plan.start_phase, "start"), (plan.stop_phase, "stop")):
         support, meta = load_plan(kept_path(kind), planner.model)
+        # exact: the same stored numbers copied (no arithmetic on either side), float64 through CDR
         assert phase.success and phase.duration == meta["duration"] and phase.effort_total == meta["effort_total"]
         assert np.array_equal(phase.t, support.t)
         assert np.array_equal(np.reshape(phase.x, (-1, nx)), support.x)

@@ -149,7 +149,7 @@ def test_the_plan_command_gives_the_kept_start_and_stop(kept, kept_start, tmp_pa
     assert f"stop to standing: 2 s with both feet down, E = {stop_meta['effort_total']:.1f}" in done.stdout
     plan = json.loads(out.read_text())
     for key, (support, meta) in (("start_phase", kept_start), ("stop_phase", (stop, stop_meta))):
-        phase = plan[key]
+        phase = plan[key]  # exact: the stored numbers copied, through JSON's shortest round-tripping repr
         assert phase["success"] and phase["duration"] == meta["duration"] and phase["effort_total"] == meta["effort_total"]
         assert np.array_equal(phase["t"], support.t) and np.array_equal(phase["X"], support.x)
         assert np.array_equal(phase["torques"], support.torques)

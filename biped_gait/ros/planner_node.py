@@ -63,8 +63,6 @@ from ..core.model.params import DEFAULT_PARAMS, load_params, names_set, shipped_
 from ..core.gait import views
 from ..core.gait.planner import SEED, GaitPlanner, GaitRequest, lasting_request, swing_request
 from ..core.dynamics.settings import DEFAULTS
-from ..core.walking.kept import check_phases_request, kept_phases
-from ..core.walking.orbit import PlannedOrbit
 from ..core.model.text import clip
 from ..recording import topics
 from ..recording.background import BackgroundRecorder
@@ -346,6 +344,9 @@ class GaitPlannerNode(Node):
         lasting = lasting_request(core_request, request.double_support)
         swing = swing_request(core_request, request.actuated_swing, request.double_support, walkable=True)
         if request.start_stop:
+            from ..core.walking.kept import check_phases_request, kept_phases  # CasADi's import only when asked
+            from ..core.walking.orbit import PlannedOrbit
+
             check_phases_request(request.double_support, request.actuated_swing)
         planner = self._planner(core_request.params, "service")
         joints = urdf_joints(planner.model)

@@ -66,7 +66,7 @@ from ..core.model.biped import BipedModel
 from ..core.model.params import BipedParams, load_params
 from ..core.walking.orbit import PlannedOrbit
 from ..core.walking.start_stop import why_not
-from ..core.walking.kept import KeptPlan, Unsettled, kept_gait, kept_plan
+from ..core.walking.kept import KeptPlan, Unsettled, kept_plan, kept_why_not
 from ..core.walking.phases.standing import Standing
 from ..core.walking.world import BASE_FRAME
 from ..core.walking.transitions import Envelope, SpeedFollower, follower_for
@@ -137,8 +137,7 @@ class SpeedCommand:
             self._explained.clear()
             self._stop, self._stop_gait, self._preparing = None, None, None
             self._start, self._start_asked, self._source = None, None, source
-        start = kept_gait("start")
-        startable = self._startable = standing and stoppable and start is not None and not start.why_not(walker.orbit)
+        startable = self._startable = standing and stoppable and not kept_why_not("start", walker.orbit)
         if stoppable and (startable or not standing):  # a standing walk that cannot start needs no stop
             self._preparing = self._prepare(walker.orbit, source, ("start", "stop") if startable else ("stop",))
         if standing:
@@ -375,8 +374,7 @@ class SpeedCommand:
             logger.info(f"speed command: 0 m/s: stopping at the touchdown of step {walker.state.step} (the kept stop "
                         f"of the gait L = {stop.step_length:g} m, T = {stop.period:g} s: {stop.plan.duration:g} s with "
                         "both feet down), then standing")
-            start = kept_gait("start")  # standing after the stop, a command starts it again where one is kept
-            startable = start is not None and not start.why_not(gait)
+            startable = not kept_why_not("start", gait)  # standing after the stop, a command starts it again
             with self._lock:
                 self.follower, self._standing, self._startable = None, walker, startable
             if startable and self._start is None:  # made ready while the stop's double support runs

@@ -99,6 +99,13 @@ def kept_gait(kind: str = "stop") -> KeptGait | None:
     return KeptGait(kind, load_params(None), meta["L"], meta["T"], meta["alpha"], meta["mode"])
 
 
+def kept_why_not(kind: str, orbit: PlannedOrbit) -> str:
+    """Why the package's kept ``kind`` (start, stop) is not of ``orbit``'s gait ('' if it is): none
+    kept, or ``KeptGait.why_not``; read from the file's meta alone (milliseconds)."""
+    gait = kept_gait(kind)
+    return f"the package keeps no {kind}" if gait is None else gait.why_not(orbit)
+
+
 def check_phases_request(double_support: float, actuated_swing: float) -> None:
     """``ValueError`` (one line) for a start and stop asked beside a double support that lasts or a
     swing actuated at its ends: the package keeps those of the paper's impulsive gait."""
@@ -117,8 +124,7 @@ def kept_phases(bm: BipedModel, orbit: PlannedOrbit) -> tuple[LastingSupport, La
     hour, ``studies/spline_study.py``; docs/model.md 14.3)."""
     phases = []
     for kind in ("start", "stop"):
-        gait = kept_gait(kind)
-        why = f"the package keeps no {kind}" if gait is None else gait.why_not(orbit)
+        why = kept_why_not(kind, orbit)
         if why:
             phases.append(refused_support(why))
             continue
