@@ -14,7 +14,8 @@ once).
 
 linear.x below ``STOP_SPEED`` (0 included) asks the walk to stop. **Where a stop is kept** (the
 hybrid engine's walk of the default parameter set, started on the gait the package keeps a stop
-of, ``core/walking/kept.py``, made ready in a thread when the walk starts): the walk stops at the
+of, ``core/walking/kept.py``, made ready in a thread at the walk's first command: a walk nobody
+steers spends nothing on it): the walk stops at the
 touchdown of the next step that aims at that gait and starts within ``kept.SETTLED`` of its start
 (``Walker.stop``: the stop's 2 s of double support, then standing, docs/model.md section 14.2; a
 walk still settling after a push walks on, said once, its error falling fourfold a step); from
@@ -106,6 +107,7 @@ class SpeedCommand:
         self._stop_home = False  # the follower has been sent back to the stop's gait's speed
         self._stop_waits = False  # said that the stop waits for the walk to settle on its gait
         self._preparing: threading.Thread | None = None  # making the kept stop (and start) ready, until joined
+        self._unprepared: PlannedOrbit | None = None  # the gait whose kept stop the walk's first command makes ready
         self._start: KeptPlan | None = None  # the kept start onto the standing walk's gait, once made ready
         self._start_asked: tuple[float, float] | None = None  # the command that asks the standing walk to start
         self._start_waits = False  # said that the start waits for the robot to settle
@@ -129,7 +131,8 @@ class SpeedCommand:
         publish its envelope stamped ``stamp_ns`` (ns: the walk's start in simulated time); with
         ``standing``, the walker stands: a command to walk starts it where a start is kept for its
         gait (made ready in a thread), else is refused; ``stoppable``: the walk can take a kept stop
-        and start (the hybrid engine's paper walk), made ready in a thread (module docstring)."""
+        and start (the hybrid engine's paper walk), made ready in a thread: a standing walk's at once, a
+        walking one's stop at its first command (module docstring)."""
         self._last, self._lapsed, self._stop_asked, self._stop_home, self._stop_waits = None, False, False, False, False
         self._start_waits = False
         with self._lock:
@@ -138,8 +141,10 @@ class SpeedCommand:
             self._stop, self._stop_gait, self._preparing = None, None, None
             self._start, self._start_asked, self._source = None, None, source
         startable = self._startable = standing and stoppable and not kept_why_not("start", walker.orbit)
-        if stoppable and (startable or not standing):  # a standing walk that cannot start needs no stop
-            self._preparing = self._prepare(walker.orbit, source, ("start", "stop") if startable else ("stop",))
+        if startable:  # a standing walk that cannot start needs no stop
+            self._preparing = self._prepare(walker.orbit, source, ("start", "stop"))
+        with self._lock:  # a walking one's, at its first command (``_command``)
+            self._unprepared = walker.orbit if stoppable and not standing else None
         if standing:
             with self._lock:
                 self.follower, self._standing, pending = None, walker, self._pending
@@ -173,7 +178,7 @@ class SpeedCommand:
         """The walk ended (a fall, its steps made): commands are ignored and nothing more is said
         of them until a walk starts again (module docstring). Called before the end is reported."""
         with self._lock:
-            self.follower, self._standing, self._pending = None, None, None
+            self.follower, self._standing, self._pending, self._unprepared = None, None, None, None
             self._walk, self._ended = self._walk + 1, True
 
     def _prepare(self, gait: PlannedOrbit, source: str | None, kinds: tuple[str, ...]) -> threading.Thread:
@@ -241,6 +246,10 @@ class SpeedCommand:
         follower = self.follower
         if follower is None:  # the walk ended meanwhile
             return
+        with self._lock:
+            gait, self._unprepared = self._unprepared, None
+        if gait is not None:  # the walk's first command: its kept stop made ready from now
+            self._preparing = self._prepare(gait, self._source, ("stop",))
         self._stop_asked = speed < STOP_SPEED  # said from the gait that walks once it is there (before_step)
         if not self._stop_asked:
             self._stop_home = self._stop_waits = False
@@ -302,7 +311,7 @@ class SpeedCommand:
                 f"speed command: no /cmd_vel for {silent:.3f} s of simulated time (cmd_vel_timeout {self.timeout:g} s): "
                 "taken as 0 m/s, a stop")
             self._command(0.0, 0.0)
-        if self._stop_asked and self._preparing is not None:  # the kept stop made ready (2.5 s from the start)
+        if self._stop_asked and self._preparing is not None:  # the kept stop made ready (2 s from the first command)
             self._preparing.join()
             self._preparing = None
             if self._stop is None:  # none kept for this walk's gait: the slowest gait, and why
