@@ -330,7 +330,8 @@ def test_a_plan_naming_a_file_is_refused(side, tmp_path, wire_params):
     proc = start_node("biped-gait-simulator", "-p", "plan_source:=topic", "-p", f"plan_topic:={topic}",
                       "-p", "exit_when_done:=true", "-p", f"record_dir:={tmp_path / 'bags'}", cwd=tmp_path)
     try:
-        wait_for(lambda: proc.poll() is not None, 60.0, "the simulator did not end")
+        wait_for(lambda: proc.poll() is not None, 60.0, "the simulator did not end",
+                 (tmp_path / "biped-gait-simulator.log",))
         side.wait(lambda: True)
     finally:
         side.node.destroy_publisher(publisher)
